@@ -1,0 +1,81 @@
+// Checks done once per system, outside the hot loops: are the coefficients finite, is the
+// matrix diagonally dominant (the condition under which the pivot-free methods are stable),
+// and, after a kernel reported a breakdown, what exactly went wrong.
+#pragma once
+
+#include <cstddef>
+#include <string>
+
+#include "tridiff/solvers/detail/scalar.hpp"
+#include "tridiff/solvers/error.hpp"
+
+namespace tridiff::detail {
+
+// The coefficient arrays of one system, with the names the public API gives them.
+template <class T>
+struct SystemView {
+  Strided<const T> a, b, c, d;
+  std::ptrdiff_t n;
+  bool periodic;  // a[0] and c[n-1] are the corner entries
+};
+
+// Throws InvalidArgument naming the first non-finite coefficient of the matrix.
+template <class T>
+void require_finite_matrix(const SystemView<T>& s, std::ptrdiff_t system) {
+  for (std::ptrdiff_t i = 0; i < s.n; ++i) {
+    const bool reads_a = i > 0 || s.periodic, reads_c = i + 1 < s.n || s.periodic;
+    if (reads_a && !is_finite(s.a[i])) throw InvalidArgument("sub", system, i, "is not finite");
+    if (!is_finite(s.b[i])) throw InvalidArgument("diag", system, i, "is not finite");
+    if (reads_c && !is_finite(s.c[i])) throw InvalidArgument("super", system, i, "is not finite");
+  }
+}
+
+template <class T>
+void require_finite_rhs(const SystemView<T>& s, std::ptrdiff_t system) {
+  for (std::ptrdiff_t i = 0; i < s.n; ++i)
+    if (!is_finite(s.d[i])) throw InvalidArgument("rhs", system, i, "is not finite");
+}
+
+// Returns -1 if the matrix is diagonally dominant by rows or by columns (weakly, with a few
+// ulps of slack for rounding in the caller's own arithmetic); otherwise the first row that
+// breaks row dominance.
+template <class T>
+std::ptrdiff_t first_non_dominant_row(const SystemView<T>& s) {
+  using R = real_t<T>;
+  const R slack = 1 - 4 * epsilon<T>;
+  const std::ptrdiff_t n = s.n;
+  auto entry_a = [&](std::ptrdiff_t i) { return (i > 0 || s.periodic) ? magnitude(s.a[i]) : R(0); };
+  auto entry_c = [&](std::ptrdiff_t i) { return (i + 1 < n || s.periodic) ? magnitude(s.c[i]) : R(0); };
+  std::ptrdiff_t first_row_failure = -1;
+  bool by_columns = true;
+  for (std::ptrdiff_t i = 0; i < n; ++i) {
+    const R diagonal = magnitude(s.b[i]);
+    if (first_row_failure < 0 && diagonal < slack * (entry_a(i) + entry_c(i))) first_row_failure = i;
+    // Column i holds c[i-1] above the diagonal and a[i+1] below it (wrapping when periodic).
+    const std::ptrdiff_t above = i > 0 ? i - 1 : n - 1, below = i + 1 < n ? i + 1 : 0;
+    R off = 0;
+    if (i > 0 || s.periodic) off += entry_c(above);
+    if (i + 1 < n || s.periodic) off += entry_a(below);
+    if (diagonal < slack * off) by_columns = false;
+    if (first_row_failure >= 0 && !by_columns) return first_row_failure;
+  }
+  return -1;
+}
+
+// Called after a kernel reported a breakdown at `row` (or -1 for a non-finite result):
+// throws the most specific error, blaming the caller's input first.
+template <class T>
+[[noreturn]] void report_breakdown(const SystemView<T>& s, std::ptrdiff_t system,
+                                   std::ptrdiff_t row, const char* method) {
+  require_finite_matrix(s, system);
+  require_finite_rhs(s, system);
+  if (row >= 0)
+    throw NumericalError(system, row,
+                         std::string("zero or vanishing pivot in ") + method +
+                             ": the matrix is singular to working precision");
+  throw NumericalError(system, -1,
+                       std::string("the solution overflowed in ") + method +
+                           ": the matrix is singular or badly scaled");
+}
+
+}  // namespace tridiff::detail

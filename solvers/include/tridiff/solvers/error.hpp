@@ -1,0 +1,64 @@
+// The exceptions of tridiff: misuse (a wrong argument) and numerical breakdown (a zero pivot,
+// a non-finite value) are both reported by throwing, naming what is at fault.
+#pragma once
+
+#include <cstddef>
+#include <stdexcept>
+#include <string>
+
+namespace tridiff {
+
+// Base of every exception the library throws.
+class Error : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// An argument is wrong: a size, a stride, a pointer, a coefficient that is not finite.
+// `system()` and `row()` are -1 when the fault is not tied to one element.
+class InvalidArgument : public Error {
+ public:
+  InvalidArgument(std::string argument, std::ptrdiff_t system, std::ptrdiff_t row,
+                  const std::string& message)
+      : Error(compose(argument, system, row, message)),
+        argument_(std::move(argument)),
+        system_(system),
+        row_(row) {}
+
+  const std::string& argument() const noexcept { return argument_; }
+  std::ptrdiff_t system() const noexcept { return system_; }
+  std::ptrdiff_t row() const noexcept { return row_; }
+
+ private:
+  static std::string compose(const std::string& argument, std::ptrdiff_t system,
+                             std::ptrdiff_t row, const std::string& message) {
+    std::string where = "argument '" + argument + "'";
+    if (system >= 0) where += ", system " + std::to_string(system);
+    if (row >= 0) where += ", row " + std::to_string(row);
+    return "tridiff: " + where + ": " + message;
+  }
+
+  std::string argument_;
+  std::ptrdiff_t system_;
+  std::ptrdiff_t row_;
+};
+
+// The numbers broke down: a zero or vanishing pivot (the system is singular to working
+// precision), an overflow, or a system the chosen method cannot solve safely.
+class NumericalError : public Error {
+ public:
+  NumericalError(std::ptrdiff_t system, std::ptrdiff_t row, const std::string& message)
+      : Error("tridiff: system " + std::to_string(system) + ", row " + std::to_string(row) +
+              ": " + message),
+        system_(system),
+        row_(row) {}
+
+  std::ptrdiff_t system() const noexcept { return system_; }
+  std::ptrdiff_t row() const noexcept { return row_; }
+
+ private:
+  std::ptrdiff_t system_;
+  std::ptrdiff_t row_;
+};
+
+}  // namespace tridiff

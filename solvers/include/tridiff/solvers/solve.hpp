@@ -1,0 +1,403 @@
+// The one entry point of the tridiagonal solvers: batches of systems in any strided layout,
+// in the general form (three diagonals) or the diffusion form (beta only), any method.
+#pragma once
+
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+#include <exception>
+#include <limits>
+#include <mutex>
+#include <string>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+#include "tridiff/solvers/detail/checks.hpp"
+#include "tridiff/solvers/detail/cyclic_reduction.hpp"
+#include "tridiff/solvers/detail/diffusion_form.hpp"
+#include "tridiff/solvers/detail/periodic.hpp"
+#include "tridiff/solvers/detail/pivoting.hpp"
+#include "tridiff/solvers/detail/thomas.hpp"
+#include "tridiff/solvers/detail/workspace.hpp"
+#include "tridiff/solvers/error.hpp"
+#include "tridiff/solvers/layout.hpp"
+
+namespace tridiff {
+
+enum class Method {
+  Auto,                     // pivoting where pivot-free is unsafe, otherwise the fastest
+  Thomas,                   // elimination without pivoting; batches run one SIMD lane per system
+  CyclicReduction,          // odd-even reduction (seed 000 §3.5.3), any n
+  ParallelCyclicReduction,  // every row reduced at once, log2(n) steps
+  Hybrid,                   // CR down to a small system, finished by PCR
+  Pivoting,                 // partial pivoting, the algorithm of LAPACK ?gtsv
+};
+
+inline const char* to_string(Method method) {
+  switch (method) {
+    case Method::Auto: return "auto";
+    case Method::Thomas: return "thomas";
+    case Method::CyclicReduction: return "cr";
+    case Method::ParallelCyclicReduction: return "pcr";
+    case Method::Hybrid: return "cr-pcr";
+    case Method::Pivoting: return "pivoting";
+  }
+  return "unknown";
+}
+
+inline constexpr Method kAllMethods[] = {Method::Auto, Method::Thomas, Method::CyclicReduction,
+                                         Method::ParallelCyclicReduction, Method::Hybrid,
+                                         Method::Pivoting};
+
+inline bool is_pivot_free(Method method) {
+  return method != Method::Auto && method != Method::Pivoting;
+}
+
+struct SolveOptions {
+  Method method = Method::Auto;
+  int threads = 0;         // 0: the OpenMP default (all cores)
+  bool periodic = false;   // sub[0] is entry (0, n-1) and super[n-1] entry (n-1, 0)
+  // The pivot-free methods are stable only for diagonally dominant matrices (by rows or by
+  // columns). With this set they refuse other matrices (NumericalError naming system and row);
+  // clear it to skip the check when dominance is known, e.g. built into the problem.
+  bool check_dominance = true;
+  std::ptrdiff_t hybrid_pcr_below = 32;  // Hybrid: rows left when CR hands over to PCR
+};
+
+struct SolveReport {
+  Method method = Method::Auto;        // the method that solved the dominant systems
+  std::ptrdiff_t pivoted_systems = 0;  // systems that Auto sent to the pivoting path
+};
+
+namespace detail {
+
+// Systems solved side by side in the lane kernels: two 64-byte vectors of scalars, enough
+// independent work per row to hide the latency of the division chain.
+template <class T>
+inline constexpr int kLanes = static_cast<int>(128 / sizeof(T));
+
+inline int resolve_threads(int threads) {
+  if (threads < 0) throw InvalidArgument("threads", -1, -1, "must be >= 0 (0: all cores)");
+#ifdef _OPENMP
+  return threads == 0 ? omp_get_max_threads() : threads;
+#else
+  return 1;
+#endif
+}
+
+template <class T>
+void require_pointer(const T* p, const char* name) {
+  if (p == nullptr) throw InvalidArgument(name, -1, -1, "is a null pointer");
+}
+
+// The output may coincide with `input` (in place) but must not otherwise share memory with it.
+template <class In, class Out>
+void require_disjoint(const In* input, const char* input_name, const Out* output,
+                      const BatchLayout& layout, bool may_alias) {
+  const auto begin_in = reinterpret_cast<std::uintptr_t>(input);
+  const auto begin_out = reinterpret_cast<std::uintptr_t>(output);
+  if (may_alias && begin_in == begin_out) return;
+  const auto end_in = begin_in + static_cast<std::uintptr_t>(layout.extent()) * sizeof(In);
+  const auto end_out = begin_out + static_cast<std::uintptr_t>(layout.extent()) * sizeof(Out);
+  if (begin_in < end_out && begin_out < end_in)
+    throw InvalidArgument("x", -1, -1,
+                          std::string("overlaps '") + input_name +
+                              "' (only rhs may be the same array as x, for an in-place solve)");
+}
+
+// Per-thread scratch, kept between calls (like BLAS buffers) so batches of small calls do
+// not pay for allocation and page faults; released after a call that needed more than 64 MiB.
+template <class T>
+struct Scratch {
+  AlignedBuffer<T> work, slab;
+  AlignedBuffer<real_t<T>> real_work;
+  static constexpr std::ptrdiff_t kKeepBytes = std::ptrdiff_t(64) << 20;
+  void trim() {
+    if ((work.size() + slab.size()) * std::ptrdiff_t(sizeof(T)) +
+            real_work.size() * std::ptrdiff_t(sizeof(real_t<T>)) > kKeepBytes)
+      *this = Scratch{};
+  }
+};
+
+// Runs body(first_system, systems, scratch) over chunks of the batch on `threads` threads.
+// The exception of the lowest chunk is rethrown after the loop, so errors are deterministic.
+template <class T, class Body>
+void for_each_chunk(std::ptrdiff_t count, std::ptrdiff_t chunk, int threads, Body&& body) {
+  const std::ptrdiff_t chunks = (count + chunk - 1) / chunk;
+  std::exception_ptr error;
+  std::ptrdiff_t error_chunk = std::numeric_limits<std::ptrdiff_t>::max();
+  std::mutex guard;
+  const int team = static_cast<int>(std::min<std::ptrdiff_t>(threads, chunks));
+#pragma omp parallel num_threads(team) if (team > 1)
+  {
+    static thread_local Scratch<T> scratch;
+#pragma omp for schedule(static)
+    for (std::ptrdiff_t k = 0; k < chunks; ++k) {
+      try {
+        body(k * chunk, std::min(chunk, count - k * chunk), scratch);
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(guard);
+        if (k < error_chunk) {
+          error_chunk = k;
+          error = std::current_exception();
+        }
+      }
+    }
+    scratch.trim();
+  }
+  if (error) std::rethrow_exception(error);
+}
+
+template <class T>
+SystemView<T> system_view(const T* a, const T* b, const T* c, const T* d,
+                          const BatchLayout& layout, std::ptrdiff_t s, bool periodic) {
+  const std::ptrdiff_t o = layout.offset(s, 0), rs = layout.row_stride;
+  return {{a + o, rs}, {b + o, rs}, {c + o, rs}, {d + o, rs}, layout.n, periodic};
+}
+
+// Solves one system with one non-Auto method; throws on breakdown.
+template <class T>
+void solve_one(const SystemView<T>& s, Strided<T> x, Method method, bool periodic,
+               std::ptrdiff_t pcr_below, AlignedBuffer<T>& work, std::ptrdiff_t system) {
+  auto inner = [&](std::ptrdiff_t n, Strided<const T> a, Strided<const T> b, Strided<const T> c,
+                   Strided<const T> d, Strided<T> out, T* w) -> std::ptrdiff_t {
+    switch (method) {
+      case Method::Thomas: return thomas(n, a, b, c, d, out, w);
+      case Method::Pivoting: return pivoting(n, a, b, c, d, out, w);
+      case Method::CyclicReduction: return cyclic_reduction(n, a, b, c, d, out, w, 1);
+      case Method::ParallelCyclicReduction: return cyclic_reduction(n, a, b, c, d, out, w, n);
+      default: return cyclic_reduction(n, a, b, c, d, out, w, pcr_below);
+    }
+  };
+  const std::ptrdiff_t n = s.n;
+  const std::ptrdiff_t inner_work = std::max(cyclic_reduction_workspace(n), pivoting_workspace(n));
+  work.resize(periodic ? periodic_workspace(n, inner_work) : inner_work);
+  const std::ptrdiff_t bad = periodic ? detail::periodic(n, s.a, s.b, s.c, s.d, x, work.data(), inner)
+                                      : inner(n, s.a, s.b, s.c, s.d, x, work.data());
+  if (bad >= 0) report_breakdown(s, system, bad, to_string(method));
+  for (std::ptrdiff_t i = 0; i < n; ++i)
+    if (!is_finite(x[i])) report_breakdown(s, system, -1, to_string(method));
+}
+
+// Classifies one system for the pivot-free methods; throws for non-finite coefficients and,
+// when `refuse` is set, for a matrix that is not diagonally dominant. Returns true if dominant.
+template <class T>
+bool check_system(const SystemView<T>& s, std::ptrdiff_t system, Method method, bool refuse) {
+  require_finite_matrix(s, system);
+  const std::ptrdiff_t row = first_non_dominant_row(s);
+  if (row >= 0 && refuse)
+    throw NumericalError(system, row,
+                         std::string("the matrix is not diagonally dominant, so ") +
+                             to_string(method) +
+                             " (no pivoting) is unsafe; use Method::Pivoting or Method::Auto");
+  return row < 0;
+}
+
+
+// Thomas on a chunk of up to W systems, one SIMD lane each. Interleaved systems (image
+// columns) are solved where they lie; other layouts, partial chunks and in-place solves go
+// through a lane-contiguous slab, so that a failed in-place solve leaves rhs intact.
+// Returns false if some lane broke down.
+template <class T>
+bool solve_lanes(const T* a, const T* b, const T* c, const T* d, T* x, const BatchLayout& layout,
+                 std::ptrdiff_t first, std::ptrdiff_t systems, Scratch<T>& scratch) {
+  constexpr int W = kLanes<T>;
+  const std::ptrdiff_t n = layout.n, o = layout.offset(first, 0);
+  if (layout.system_stride == 1 && systems == W && x != d) {
+    scratch.work.resize(n * W);
+    return thomas_lanes<T, W>(n, a + o, b + o, c + o, d + o, x + o, layout.row_stride,
+                              scratch.work.data());
+  }
+  scratch.slab.resize(6 * n * W);
+  T* sa = scratch.slab.data();
+  T* sb = sa + n * W;
+  T* sc = sb + n * W;
+  T* sd = sc + n * W;
+  T* sw = sd + n * W;
+  const int lanes = static_cast<int>(systems);
+  gather<T, W>(a, layout, first, lanes, T(0), sa);
+  gather<T, W>(b, layout, first, lanes, T(1), sb);
+  gather<T, W>(c, layout, first, lanes, T(0), sc);
+  gather<T, W>(d, layout, first, lanes, T(0), sd);
+  if (!thomas_lanes<T, W>(n, sa, sb, sc, sd, sd, W, sw)) return false;
+  scatter<T, W>(sd, layout, first, lanes, x);
+  return true;
+}
+
+// The diffusion-form counterpart of solve_lanes.
+template <class T>
+bool solve_diffusion_lanes(const real_t<T>* beta, const T* d, T* x, const BatchLayout& layout,
+                           std::ptrdiff_t first, std::ptrdiff_t systems, Scratch<T>& scratch) {
+  using R = real_t<T>;
+  constexpr int W = kLanes<T>;
+  const std::ptrdiff_t n = layout.n, o = layout.offset(first, 0);
+  scratch.real_work.resize(2 * n * W);
+  R* work = scratch.real_work.data();
+  if (layout.system_stride == 1 && systems == W && x != d)
+    return diffusion_thomas_lanes<T, W>(n, beta + o, d + o, x + o, layout.row_stride, work);
+  scratch.slab.resize(n * W);
+  T* sd = scratch.slab.data();
+  R* sbeta = work + n * W;
+  const int lanes = static_cast<int>(systems);
+  gather<R, W>(beta, layout, first, lanes, R(0), sbeta);
+  gather<T, W>(d, layout, first, lanes, T(0), sd);
+  if (!diffusion_thomas_lanes<T, W>(n, sbeta, sd, sd, W, work)) return false;
+  scatter<T, W>(sd, layout, first, lanes, x);
+  return true;
+}
+
+template <class R>
+void require_valid_beta(Strided<const R> beta, std::ptrdiff_t n, bool periodic,
+                        std::ptrdiff_t system) {
+  const std::ptrdiff_t links = periodic ? n : n - 1;
+  for (std::ptrdiff_t i = 0; i < links; ++i) {
+    if (!std::isfinite(beta[i])) throw InvalidArgument("beta", system, i, "is not finite");
+    if (beta[i] < 0)
+      throw InvalidArgument("beta", system, i,
+                            "is negative (" + std::to_string(beta[i]) +
+                                "): a conductance must be >= 0");
+  }
+}
+
+// Called when the diffusion lanes broke down although beta is valid: the rhs is at fault, or
+// the solution overflowed.
+template <class T>
+[[noreturn]] void report_breakdown_diffusion(Strided<const T> rhs, std::ptrdiff_t n,
+                                             std::ptrdiff_t system) {
+  for (std::ptrdiff_t i = 0; i < n; ++i)
+    if (!is_finite(rhs[i])) throw InvalidArgument("rhs", system, i, "is not finite");
+  throw NumericalError(system, -1, "the solution overflowed: rhs is too large for this type");
+}
+
+// The three diagonals of the diffusion system (seed 000 eq. 3.10).
+template <class R, class T>
+void expand_diffusion(Strided<const R> beta, std::ptrdiff_t n, bool periodic, T* a, T* b, T* c) {
+  for (std::ptrdiff_t i = 0; i < n; ++i) {
+    const R left = i > 0 ? beta[i - 1] : (periodic ? beta[n - 1] : R(0));
+    const R right = i + 1 < n || periodic ? beta[i] : R(0);
+    a[i] = T(-left);
+    b[i] = T(1 + left + right);
+    c[i] = T(-right);
+  }
+}
+
+}  // namespace detail
+
+// Solves the batch  sub[i] x[i-1] + diag[i] x[i] + super[i] x[i+1] = rhs[i]  for every system
+// of `layout`. sub[0] and super[n-1] are not read unless options.periodic. x may be rhs
+// (in place) but must not overlap the diagonals. Throws InvalidArgument for bad arguments and
+// NumericalError for a singular system or a method that is unsafe for it. On an exception the
+// contents of x are unspecified, except that an in-place solve by Thomas leaves the systems it
+// could not solve as they were.
+template <class T>
+SolveReport solve(const T* sub, const T* diag, const T* super, const T* rhs, T* x,
+                  const BatchLayout& layout, const SolveOptions& options = {}) {
+  static_assert(is_supported_scalar_v<T>, "tridiff solvers support float, double and complex");
+  using namespace detail;
+  validate_layout(layout);
+  require_pointer(sub, "sub");
+  require_pointer(diag, "diag");
+  require_pointer(super, "super");
+  require_pointer(rhs, "rhs");
+  require_pointer(x, "x");
+  require_disjoint(sub, "sub", x, layout, false);
+  require_disjoint(diag, "diag", x, layout, false);
+  require_disjoint(super, "super", x, layout, false);
+  require_disjoint(rhs, "rhs", x, layout, true);
+  const int threads = resolve_threads(options.threads);
+  const Method method = options.method;
+  const Method fast = method == Method::Auto ? Method::Thomas : method;
+  const bool check = method == Method::Auto || (options.check_dominance && is_pivot_free(method));
+  constexpr int W = kLanes<T>;
+  const bool lanes = fast == Method::Thomas && !options.periodic;
+  std::ptrdiff_t pivoted = 0;
+  std::mutex count_guard;
+
+  auto solve_chunk = [&](std::ptrdiff_t first, std::ptrdiff_t systems, Scratch<T>& scratch) {
+    bool all_dominant = true;
+    bool dominant[W];
+    for (std::ptrdiff_t l = 0; l < systems; ++l) {
+      const auto view = system_view(sub, diag, super, rhs, layout, first + l, options.periodic);
+      dominant[l] = !check || check_system(view, first + l, method, method != Method::Auto);
+      all_dominant = all_dominant && dominant[l];
+    }
+    if (lanes && all_dominant && solve_lanes(sub, diag, super, rhs, x, layout, first, systems, scratch))
+      return;
+    // A lane broke down (re-solve one by one so the error names system and row), or this
+    // chunk needs per-system methods.
+    std::ptrdiff_t local_pivoted = 0;
+    for (std::ptrdiff_t l = 0; l < systems; ++l) {
+      const std::ptrdiff_t s = first + l;
+      const auto view = system_view(sub, diag, super, rhs, layout, s, options.periodic);
+      local_pivoted += dominant[l] ? 0 : 1;
+      solve_one(view, Strided<T>{x + layout.offset(s, 0), layout.row_stride},
+                dominant[l] ? fast : Method::Pivoting, options.periodic,
+                options.hybrid_pcr_below, scratch.work, s);
+    }
+    if (local_pivoted > 0) {
+      std::lock_guard<std::mutex> lock(count_guard);
+      pivoted += local_pivoted;
+    }
+  };
+  for_each_chunk<T>(layout.count, lanes ? W : 1, threads, solve_chunk);
+  return {fast, pivoted};
+}
+
+// In-place form: rhs_then_x holds the right-hand side on entry and the solution on return.
+template <class T>
+SolveReport solve_in_place(const T* sub, const T* diag, const T* super, T* rhs_then_x,
+                           const BatchLayout& layout, const SolveOptions& options = {}) {
+  return solve(sub, diag, super, rhs_then_x, rhs_then_x, layout, options);
+}
+
+// Solves the implicit diffusion systems of seed 000 eq. 3.10,
+//   -beta[i-1] x[i-1] + (1 + beta[i-1] + beta[i]) x[i] - beta[i] x[i+1] = rhs[i],
+// with beta[-1] = beta[n-1] = 0 (insulated ends); with options.periodic, beta[n-1] links
+// x[n-1] to x[0] instead. beta is the conductance of the link from i to i+1, >= 0 and finite
+// (checked: InvalidArgument naming the system and row otherwise); the matrix is then strictly
+// diagonally dominant and every method is safe. beta has the layout of rhs and x.
+template <class T>
+SolveReport solve_diffusion(const real_t<T>* beta, const T* rhs, T* x, const BatchLayout& layout,
+                            const SolveOptions& options = {}) {
+  static_assert(is_supported_scalar_v<T>, "tridiff solvers support float, double and complex");
+  using namespace detail;
+  using R = real_t<T>;
+  validate_layout(layout);
+  require_pointer(beta, "beta");
+  require_pointer(rhs, "rhs");
+  require_pointer(x, "x");
+  require_disjoint(beta, "beta", x, layout, false);
+  require_disjoint(rhs, "rhs", x, layout, true);
+  const int threads = resolve_threads(options.threads);
+  const Method fast = options.method == Method::Auto ? Method::Thomas : options.method;
+  constexpr int W = kLanes<T>;
+  const bool lanes = fast == Method::Thomas && !options.periodic;
+  const std::ptrdiff_t n = layout.n;
+
+  auto solve_chunk = [&](std::ptrdiff_t first, std::ptrdiff_t systems, Scratch<T>& scratch) {
+    if (lanes && solve_diffusion_lanes(beta, rhs, x, layout, first, systems, scratch)) return;
+    for (std::ptrdiff_t l = 0; l < systems; ++l) {
+      const std::ptrdiff_t s = first + l;
+      const std::ptrdiff_t o = layout.offset(s, 0);
+      const Strided<const R> b{beta + o, layout.row_stride};
+      require_valid_beta(b, n, options.periodic, s);
+      if (lanes) report_breakdown_diffusion(Strided<const T>{rhs + o, layout.row_stride}, n, s);
+      // Other methods, and periodic systems: expand to three diagonals.
+      scratch.slab.resize(3 * n);
+      T* a = scratch.slab.data();
+      T* diag = a + n;
+      T* c = diag + n;
+      expand_diffusion(b, n, options.periodic, a, diag, c);
+      const SystemView<T> view{{a, 1}, {diag, 1}, {c, 1}, {rhs + o, layout.row_stride}, n,
+                               options.periodic};
+      solve_one(view, Strided<T>{x + o, layout.row_stride}, fast, options.periodic,
+                options.hybrid_pcr_below, scratch.work, s);
+    }
+  };
+  for_each_chunk<T>(layout.count, lanes ? W : 1, threads, solve_chunk);
+  return {fast, 0};
+}
+
+}  // namespace tridiff
