@@ -73,10 +73,12 @@ struct SolveReport {
 
 namespace detail {
 
-// Systems solved side by side in the lane kernels: two 64-byte vectors of scalars, enough
-// independent work per row to hide the latency of the division chain.
+// Systems solved side by side in the lane kernels: four 64-byte vectors of scalars, enough
+// independent work per row to hide the latency of the division chain, and 256 contiguous
+// bytes per row of an image column, enough for the prefetchers. (Measured on 4096 x 4096
+// float, 2 threads, AMD EPYC Zen 5: 16 lanes 3x slower on columns, 128 lanes 1.5x slower.)
 template <class T>
-inline constexpr int kLanes = static_cast<int>(128 / sizeof(T));
+inline constexpr int kLanes = static_cast<int>(256 / sizeof(T));
 
 inline int resolve_threads(int threads) {
   if (threads < 0) throw InvalidArgument("threads", -1, -1, "must be >= 0 (0: all cores)");
@@ -233,13 +235,16 @@ bool solve_diffusion_lanes(const real_t<T>* beta, const T* d, T* x, const BatchL
   using R = real_t<T>;
   constexpr int W = kLanes<T>;
   const std::ptrdiff_t n = layout.n, o = layout.offset(first, 0);
-  scratch.real_work.resize(2 * n * W);
+  const std::ptrdiff_t work_size = diffusion_lanes_workspace<T>(n, W);
+  scratch.real_work.resize(work_size + n * W + 3 * kTransposeBlock * W);
   R* work = scratch.real_work.data();
-  if (layout.system_stride == 1 && systems == W && x != d)
+  if (layout.system_stride == 1 && systems == W)  // image columns: lanes in place
     return diffusion_thomas_lanes<T, W>(n, beta + o, d + o, x + o, layout.row_stride, work);
+  if (layout.row_stride == 1 && systems == W)  // image rows: transposed block by block
+    return diffusion_thomas_rows<T, W>(n, beta + o, d + o, x + o, layout.system_stride, work);
   scratch.slab.resize(n * W);
   T* sd = scratch.slab.data();
-  R* sbeta = work + n * W;
+  R* sbeta = work + work_size;
   const int lanes = static_cast<int>(systems);
   gather<R, W>(beta, layout, first, lanes, R(0), sbeta);
   gather<T, W>(d, layout, first, lanes, T(0), sd);

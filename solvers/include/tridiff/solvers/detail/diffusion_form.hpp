@@ -13,6 +13,7 @@
 #include <cstddef>
 
 #include "tridiff/solvers/detail/scalar.hpp"
+#include "tridiff/solvers/detail/transpose.hpp"
 
 namespace tridiff::detail {
 
@@ -34,53 +35,157 @@ void diffusion_thomas(std::ptrdiff_t n, Strided<const real_t<T>> beta, Strided<c
   for (std::ptrdiff_t i = n - 2; i >= 0; --i) x[i] += work[i] * x[i + 1];
 }
 
-// W systems at once, lane-contiguous as in thomas_lanes. `work` holds n * W reals.
-// Returns false if some beta is negative or not finite, or the result is not finite.
+// Reals of workspace DiffusionLanes needs.
+template <class T>
+constexpr std::ptrdiff_t diffusion_lanes_workspace(std::ptrdiff_t n, int lanes) {
+  return n * lanes * (1 + std::ptrdiff_t(sizeof(T) / sizeof(real_t<T>)));
+}
+
+// The same elimination on W systems at once, one SIMD lane each, fed block by block so that a
+// driver can transpose image rows into lanes a few columns at a time (all in L1).
+// The forward sweep keeps its results in `work` (the eliminated right-hand side and the
+// multipliers), so x is written once, by the backward sweep, and only after the forward sweep
+// found beta >= 0 and finite and the eliminated rhs finite; x is then a convex combination
+// of the rhs and cannot overflow. In-place solves (x == d) are therefore safe.
+template <class T, int W>
+class DiffusionLanes {
+  using R = real_t<T>;
+  static_assert(!is_complex_v<T> || sizeof(T) == 2 * sizeof(R));
+
+ public:
+  DiffusionLanes(std::ptrdiff_t n, R* work)
+      : n_(n), multipliers_(work), eliminated_(reinterpret_cast<T*>(work + n * W)) {
+    for (int l = 0; l < W; ++l) {
+      beta_before_[l] = 0;
+      e_before_[l] = 1;
+      min_beta_[l] = 0;
+      probe_[l] = 0;
+      carry_[l] = T(0);
+    }
+  }
+
+  // Rows [begin, end) in increasing order; beta and rhs of row i at (i - begin) * stride + lane.
+  void forward(std::ptrdiff_t begin, std::ptrdiff_t end, const R* beta, const T* d,
+               std::ptrdiff_t stride) {
+    // Work on local copies of the state: the compiler then keeps it in registers, as it
+    // cannot prove that the stores through w and e leave the members alone.
+    R beta_before[W], e_before[W], min_beta[W], probe[W];
+    T carry[W];
+    load_state(beta_before, e_before, min_beta, probe, carry);
+    for (std::ptrdiff_t i = begin; i < end; ++i) {
+      const std::ptrdiff_t row = (i - begin) * stride;
+      const bool has_link = i + 1 < n_;  // beta[n-1] is not part of the system
+      R* w = multipliers_ + i * W;
+      T* e = eliminated_ + i * W;
+#pragma omp simd
+      for (int l = 0; l < W; ++l) {
+        const R beta_here = has_link ? beta[row + l] : R(0);
+        const R g = 1 + beta_before[l] * e_before[l];
+        const R inverse = 1 / (g + beta_here);
+        const T value = (d[row + l] + beta_before[l] * carry[l]) * inverse;
+        e[l] = value;
+        carry[l] = value;
+        w[l] = beta_here * inverse;
+        e_before[l] = g * inverse;
+        beta_before[l] = beta_here;
+        min_beta[l] = std::min(min_beta[l], beta_here);
+        probe[l] += beta_here * 0 + magnitude(value) * 0;
+      }
+    }
+    store_state(beta_before, e_before, min_beta, probe, carry);
+  }
+
+  // After the whole forward sweep: were beta and the rhs valid in every lane?
+  bool healthy() const {
+    bool ok = true;
+    for (int l = 0; l < W; ++l) ok = ok && min_beta_[l] >= 0 && probe_[l] == 0;
+    return ok;
+  }
+
+  // Rows [begin, end) in decreasing order, called from the last block to the first; the
+  // solution of row i goes to x + (i - begin) * stride + lane.
+  void backward(std::ptrdiff_t begin, std::ptrdiff_t end, T* x, std::ptrdiff_t stride) {
+    T carry[W];
+    for (int l = 0; l < W; ++l) carry[l] = carry_[l];
+    for (std::ptrdiff_t i = end - 1; i >= begin; --i) {
+      const R* w = multipliers_ + i * W;
+      const T* e = eliminated_ + i * W;
+      T* out = x + (i - begin) * stride;
+      const bool last = i == n_ - 1;
+#pragma omp simd
+      for (int l = 0; l < W; ++l) {
+        carry[l] = last ? e[l] : e[l] + w[l] * carry[l];
+        out[l] = carry[l];
+      }
+    }
+    for (int l = 0; l < W; ++l) carry_[l] = carry[l];
+  }
+
+ private:
+  void load_state(R* beta_before, R* e_before, R* min_beta, R* probe, T* carry) const {
+    for (int l = 0; l < W; ++l) {
+      beta_before[l] = beta_before_[l];
+      e_before[l] = e_before_[l];
+      min_beta[l] = min_beta_[l];
+      probe[l] = probe_[l];
+      carry[l] = carry_[l];
+    }
+  }
+  void store_state(const R* beta_before, const R* e_before, const R* min_beta, const R* probe,
+                   const T* carry) {
+    for (int l = 0; l < W; ++l) {
+      beta_before_[l] = beta_before[l];
+      e_before_[l] = e_before[l];
+      min_beta_[l] = min_beta[l];
+      probe_[l] = probe[l];
+      carry_[l] = carry[l];
+    }
+  }
+
+  std::ptrdiff_t n_;
+  R* multipliers_;  // beta_i / m_i  (= -c'_i)
+  T* eliminated_;   // d'_i
+  R beta_before_[W], e_before_[W], min_beta_[W], probe_[W];
+  T carry_[W];  // forward: d'_{i-1}; backward: x_{i+1}
+};
+
+// Lane-contiguous systems (equation i of lane l at i * row_stride + l). Returns false, with x
+// untouched, if some beta is negative or not finite or the rhs is not finite.
 template <class T, int W>
 bool diffusion_thomas_lanes(std::ptrdiff_t n, const real_t<T>* beta, const T* d, T* x,
                             std::ptrdiff_t row_stride, real_t<T>* work) {
+  DiffusionLanes<T, W> sweep(n, work);
+  sweep.forward(0, n, beta, d, row_stride);
+  if (!sweep.healthy()) return false;
+  sweep.backward(0, n, x, row_stride);
+  return true;
+}
+
+// Contiguous systems (image rows: equation i of system l at l * pitch + i), W at a time.
+// Blocks of kBlock columns are transposed into lanes in L1, so each row is read and written
+// once, sequentially. `work` holds diffusion_lanes_workspace + 3 * kBlock * W reals.
+template <class T, int W>
+bool diffusion_thomas_rows(std::ptrdiff_t n, const real_t<T>* beta, const T* d, T* x,
+                           std::ptrdiff_t pitch, real_t<T>* work) {
   using R = real_t<T>;
-  R beta_before[W], e_before[W], min_beta[W], probe[W];
-  T previous_x[W];
-  for (int l = 0; l < W; ++l) {
-    beta_before[l] = 0;
-    e_before[l] = 1;
-    min_beta[l] = 0;
-    probe[l] = 0;
-    previous_x[l] = T(0);
+  constexpr std::ptrdiff_t kBlock = kTransposeBlock;
+  DiffusionLanes<T, W> sweep(n, work);
+  R* block_beta = work + diffusion_lanes_workspace<T>(n, W);
+  T* block_values = reinterpret_cast<T*>(block_beta + kBlock * W);
+  for (std::ptrdiff_t begin = 0; begin < n; begin += kBlock) {
+    const std::ptrdiff_t end = std::min(n, begin + kBlock);
+    transpose_into_lanes<R, W>(beta + begin, pitch, end - begin, block_beta);
+    transpose_into_lanes<T, W>(d + begin, pitch, end - begin, block_values);
+    sweep.forward(begin, end, block_beta, block_values, W);
   }
-  for (std::ptrdiff_t i = 0; i < n; ++i) {
-    const std::ptrdiff_t row = i * row_stride;
-    const bool has_link = i + 1 < n;  // beta[n-1] is not part of the system
-    R* w = work + i * W;
-#pragma omp simd
-    for (int l = 0; l < W; ++l) {
-      const R beta_here = has_link ? beta[row + l] : R(0);
-      const R g = 1 + beta_before[l] * e_before[l];
-      const R inverse = 1 / (g + beta_here);
-      const T xi = (d[row + l] + beta_before[l] * previous_x[l]) * inverse;
-      x[row + l] = xi;
-      previous_x[l] = xi;
-      w[l] = beta_here * inverse;
-      e_before[l] = g * inverse;
-      beta_before[l] = beta_here;
-      min_beta[l] = std::min(min_beta[l], beta_here);
-      probe[l] += beta_here * 0 + magnitude(xi) * 0;
-    }
+  if (!sweep.healthy()) return false;
+  const std::ptrdiff_t last_begin = (n - 1) / kBlock * kBlock;
+  for (std::ptrdiff_t begin = last_begin; begin >= 0; begin -= kBlock) {
+    const std::ptrdiff_t end = std::min(n, begin + kBlock);
+    sweep.backward(begin, end, block_values, W);
+    transpose_from_lanes<T, W>(block_values, end - begin, x + begin, pitch);
   }
-  for (std::ptrdiff_t i = n - 2; i >= 0; --i) {
-    const std::ptrdiff_t row = i * row_stride;
-    const R* w = work + i * W;
-#pragma omp simd
-    for (int l = 0; l < W; ++l) {
-      const T xi = x[row + l] + w[l] * x[row + row_stride + l];
-      x[row + l] = xi;
-      probe[l] += magnitude(xi) * 0;
-    }
-  }
-  bool healthy = true;
-  for (int l = 0; l < W; ++l) healthy = healthy && min_beta[l] >= 0 && probe[l] == 0;
-  return healthy;
+  return true;
 }
 
 }  // namespace tridiff::detail

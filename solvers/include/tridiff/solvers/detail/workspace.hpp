@@ -7,6 +7,7 @@
 #include <memory>
 #include <new>
 
+#include "tridiff/solvers/detail/transpose.hpp"
 #include "tridiff/solvers/layout.hpp"
 
 namespace tridiff::detail {
@@ -42,6 +43,9 @@ class AlignedBuffer {
 template <class T, int W>
 void gather(const T* source, const BatchLayout& layout, std::ptrdiff_t first, int lanes, T pad,
             T* slab) {
+  if (layout.row_stride == 1 && lanes == W)
+    return transpose_into_lanes<T, W>(source + layout.offset(first, 0), layout.system_stride,
+                                      layout.n, slab);
   for (std::ptrdiff_t i = 0; i < layout.n; ++i) {
     const T* row = source + layout.offset(first, i);
     T* out = slab + i * W;
@@ -53,6 +57,9 @@ void gather(const T* source, const BatchLayout& layout, std::ptrdiff_t first, in
 template <class T, int W>
 void scatter(const T* slab, const BatchLayout& layout, std::ptrdiff_t first, int lanes,
              T* destination) {
+  if (layout.row_stride == 1 && lanes == W)
+    return transpose_from_lanes<T, W>(slab, layout.n, destination + layout.offset(first, 0),
+                                      layout.system_stride);
   for (std::ptrdiff_t i = 0; i < layout.n; ++i) {
     T* row = destination + layout.offset(first, i);
     const T* in = slab + i * W;

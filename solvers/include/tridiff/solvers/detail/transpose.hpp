@@ -1,0 +1,128 @@
+// Small transposes between W contiguous rows and lane-contiguous blocks (row k of a block
+// holds element k of every row): how image rows become one SIMD lane per system. Blocks are
+// at most 16 columns wide; with AVX-512, float blocks are transposed 16 x 16 in registers.
+#pragma once
+
+#include <algorithm>
+#include <cstddef>
+#include <type_traits>
+
+#if defined(__AVX512F__)
+#include <immintrin.h>
+#endif
+
+// GCC 12 reports its own _mm512_undefined_* placeholders inside the AVX-512 intrinsics as
+// maybe-uninitialized (GCC bug 105593); nothing here reads an uninitialised value.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#pragma GCC diagnostic ignored "-Wuninitialized"
+#endif
+
+namespace tridiff::detail {
+
+// Columns per block when a driver streams rows through lanes: 32 keeps three blocks of 64
+// lanes of float in half of L1.
+inline constexpr std::ptrdiff_t kTransposeBlock = 32;
+
+#if defined(__AVX512F__)
+// In-register transpose of 16 rows of 16 floats: interleave pairs of rows, then pairs of
+// pairs, then 128-bit quarters twice.
+inline void transpose_16x16(__m512 r[16]) {
+  __m512 t[16], u[16];
+  for (int k = 0; k < 8; ++k) {
+    t[2 * k] = _mm512_unpacklo_ps(r[2 * k], r[2 * k + 1]);
+    t[2 * k + 1] = _mm512_unpackhi_ps(r[2 * k], r[2 * k + 1]);
+  }
+  for (int k = 0; k < 4; ++k) {
+    const __m512d a = _mm512_castps_pd(t[4 * k]), b = _mm512_castps_pd(t[4 * k + 2]);
+    const __m512d c = _mm512_castps_pd(t[4 * k + 1]), d = _mm512_castps_pd(t[4 * k + 3]);
+    u[4 * k] = _mm512_castpd_ps(_mm512_unpacklo_pd(a, b));
+    u[4 * k + 1] = _mm512_castpd_ps(_mm512_unpackhi_pd(a, b));
+    u[4 * k + 2] = _mm512_castpd_ps(_mm512_unpacklo_pd(c, d));
+    u[4 * k + 3] = _mm512_castpd_ps(_mm512_unpackhi_pd(c, d));
+  }
+  for (int k = 0; k < 2; ++k)
+    for (int j = 0; j < 4; ++j) {
+      t[8 * k + j] = _mm512_shuffle_f32x4(u[8 * k + j], u[8 * k + 4 + j], 0x88);
+      t[8 * k + 4 + j] = _mm512_shuffle_f32x4(u[8 * k + j], u[8 * k + 4 + j], 0xdd);
+    }
+  for (int j = 0; j < 8; ++j) {
+    r[j] = _mm512_shuffle_f32x4(t[j], t[8 + j], 0x88);
+    r[8 + j] = _mm512_shuffle_f32x4(t[j], t[8 + j], 0xdd);
+  }
+}
+
+inline __mmask16 first_columns(std::ptrdiff_t columns) {
+  return columns >= 16 ? __mmask16(0xFFFF) : __mmask16((1u << columns) - 1);
+}
+#endif
+
+// block[k * W + l] = rows[l * pitch + k] for k < columns (<= 16), l < W.
+template <class T, int W>
+inline void transpose_into_lanes_16(const T* rows, std::ptrdiff_t pitch, std::ptrdiff_t columns,
+                                 T* block) {
+#if defined(__AVX512F__)
+  if constexpr (std::is_same_v<T, float> && W % 16 == 0) {
+    const __mmask16 mask = first_columns(columns);
+    for (int group = 0; group < W; group += 16) {
+      __m512 r[16];
+      for (int k = 0; k < 16; ++k) r[k] = _mm512_maskz_loadu_ps(mask, rows + (group + k) * pitch);
+      transpose_16x16(r);
+      for (std::ptrdiff_t k = 0; k < columns; ++k) _mm512_storeu_ps(block + k * W + group, r[k]);
+    }
+    return;
+  }
+#endif
+  for (int l = 0; l < W; ++l) {
+    const T* row = rows + l * pitch;
+    for (std::ptrdiff_t k = 0; k < columns; ++k) block[k * W + l] = row[k];
+  }
+}
+
+// rows[l * pitch + k] = block[k * W + l] for k < columns (<= 16), l < W.
+template <class T, int W>
+inline void transpose_from_lanes_16(const T* block, std::ptrdiff_t columns, T* rows,
+                                 std::ptrdiff_t pitch) {
+#if defined(__AVX512F__)
+  if constexpr (std::is_same_v<T, float> && W % 16 == 0) {
+    const __mmask16 mask = first_columns(columns);
+    for (int group = 0; group < W; group += 16) {
+      __m512 r[16];
+      for (std::ptrdiff_t k = 0; k < 16; ++k)
+        r[k] = k < columns ? _mm512_loadu_ps(block + k * W + group) : _mm512_setzero_ps();
+      transpose_16x16(r);
+      for (int k = 0; k < 16; ++k) _mm512_mask_storeu_ps(rows + (group + k) * pitch, mask, r[k]);
+    }
+    return;
+  }
+#endif
+  for (int l = 0; l < W; ++l) {
+    T* row = rows + l * pitch;
+    for (std::ptrdiff_t k = 0; k < columns; ++k) row[k] = block[k * W + l];
+  }
+}
+
+// block[k * W + l] = rows[l * pitch + k] for k < columns, l < W.
+template <class T, int W>
+inline void transpose_into_lanes(const T* rows, std::ptrdiff_t pitch, std::ptrdiff_t columns,
+                                 T* block) {
+  for (std::ptrdiff_t k = 0; k < columns; k += 16)
+    transpose_into_lanes_16<T, W>(rows + k, pitch, std::min<std::ptrdiff_t>(16, columns - k),
+                                  block + k * W);
+}
+
+// rows[l * pitch + k] = block[k * W + l] for k < columns, l < W.
+template <class T, int W>
+inline void transpose_from_lanes(const T* block, std::ptrdiff_t columns, T* rows,
+                                 std::ptrdiff_t pitch) {
+  for (std::ptrdiff_t k = 0; k < columns; k += 16)
+    transpose_from_lanes_16<T, W>(block + k * W, std::min<std::ptrdiff_t>(16, columns - k),
+                                  rows + k, pitch);
+}
+
+}  // namespace tridiff::detail
+
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic pop
+#endif
