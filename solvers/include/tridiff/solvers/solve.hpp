@@ -236,7 +236,7 @@ bool solve_diffusion_lanes(const real_t<T>* beta, const T* d, T* x, const BatchL
   constexpr int W = kLanes<T>;
   const std::ptrdiff_t n = layout.n, o = layout.offset(first, 0);
   const std::ptrdiff_t work_size = diffusion_lanes_workspace<T>(n, W);
-  scratch.real_work.resize(work_size + n * W + 3 * kTransposeBlock * W);
+  scratch.real_work.resize(std::max(work_size + n * W, diffusion_rows_workspace<T>(n, W)));
   R* work = scratch.real_work.data();
   if (layout.system_stride == 1 && systems == W)  // image columns: lanes in place
     return diffusion_thomas_lanes<T, W>(n, beta + o, d + o, x + o, layout.row_stride, work);

@@ -161,30 +161,52 @@ bool diffusion_thomas_lanes(std::ptrdiff_t n, const real_t<T>* beta, const T* d,
   return true;
 }
 
+// Pitch of the staging copy of W rows: a multiple of 16 elements (aligned rows) that is not a
+// multiple of 4 KiB, so the W rows of a transposed block do not fall into one cache set.
+inline std::ptrdiff_t staging_pitch(std::ptrdiff_t n) { return (n + 15) / 16 * 16 + 16; }
+
+// Reals of workspace diffusion_thomas_rows needs.
+template <class T>
+std::ptrdiff_t diffusion_rows_workspace(std::ptrdiff_t n, int lanes) {
+  const std::ptrdiff_t per_value = std::ptrdiff_t(sizeof(T) / sizeof(real_t<T>));
+  return diffusion_lanes_workspace<T>(n, lanes) +
+         lanes * staging_pitch(n) * (1 + per_value) + kTransposeBlock * lanes * (1 + per_value);
+}
+
 // Contiguous systems (image rows: equation i of system l at l * pitch + i), W at a time.
-// Blocks of kBlock columns are transposed into lanes in L1, so each row is read and written
-// once, sequentially. `work` holds diffusion_lanes_workspace + 3 * kBlock * W reals.
+// The W rows are first copied one after another into a staging area (one sequential stream
+// at a time: W rows read side by side are more streams than DRAM and the prefetchers serve
+// well, and a power-of-two pitch puts them all in one cache set). Blocks of kTransposeBlock
+// columns are then transposed into lanes in L1; the solution goes back the same way.
 template <class T, int W>
 bool diffusion_thomas_rows(std::ptrdiff_t n, const real_t<T>* beta, const T* d, T* x,
                            std::ptrdiff_t pitch, real_t<T>* work) {
   using R = real_t<T>;
   constexpr std::ptrdiff_t kBlock = kTransposeBlock;
+  const std::ptrdiff_t staged = staging_pitch(n);
   DiffusionLanes<T, W> sweep(n, work);
-  R* block_beta = work + diffusion_lanes_workspace<T>(n, W);
+  R* staged_beta = work + diffusion_lanes_workspace<T>(n, W);
+  T* staged_values = reinterpret_cast<T*>(staged_beta + W * staged);
+  R* block_beta = reinterpret_cast<R*>(staged_values + W * staged);
   T* block_values = reinterpret_cast<T*>(block_beta + kBlock * W);
+  for (int l = 0; l < W; ++l) {
+    std::copy(beta + l * pitch, beta + l * pitch + n, staged_beta + l * staged);
+    std::copy(d + l * pitch, d + l * pitch + n, staged_values + l * staged);
+  }
   for (std::ptrdiff_t begin = 0; begin < n; begin += kBlock) {
     const std::ptrdiff_t end = std::min(n, begin + kBlock);
-    transpose_into_lanes<R, W>(beta + begin, pitch, end - begin, block_beta);
-    transpose_into_lanes<T, W>(d + begin, pitch, end - begin, block_values);
+    transpose_into_lanes<R, W>(staged_beta + begin, staged, end - begin, block_beta);
+    transpose_into_lanes<T, W>(staged_values + begin, staged, end - begin, block_values);
     sweep.forward(begin, end, block_beta, block_values, W);
   }
   if (!sweep.healthy()) return false;
-  const std::ptrdiff_t last_begin = (n - 1) / kBlock * kBlock;
-  for (std::ptrdiff_t begin = last_begin; begin >= 0; begin -= kBlock) {
+  for (std::ptrdiff_t begin = (n - 1) / kBlock * kBlock; begin >= 0; begin -= kBlock) {
     const std::ptrdiff_t end = std::min(n, begin + kBlock);
     sweep.backward(begin, end, block_values, W);
-    transpose_from_lanes<T, W>(block_values, end - begin, x + begin, pitch);
+    transpose_from_lanes<T, W>(block_values, end - begin, staged_values + begin, staged);
   }
+  for (int l = 0; l < W; ++l)
+    std::copy(staged_values + l * staged, staged_values + l * staged + n, x + l * pitch);
   return true;
 }
 
