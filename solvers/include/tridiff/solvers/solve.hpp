@@ -9,6 +9,7 @@
 #include <limits>
 #include <mutex>
 #include <string>
+#include <vector>
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -17,6 +18,7 @@
 #include "tridiff/solvers/detail/checks.hpp"
 #include "tridiff/solvers/detail/cyclic_reduction.hpp"
 #include "tridiff/solvers/detail/diffusion_form.hpp"
+#include "tridiff/solvers/detail/partitioned.hpp"
 #include "tridiff/solvers/detail/periodic.hpp"
 #include "tridiff/solvers/detail/pivoting.hpp"
 #include "tridiff/solvers/detail/thomas.hpp"
@@ -69,6 +71,7 @@ struct SolveOptions {
 struct SolveReport {
   Method method = Method::Auto;        // the method that solved the dominant systems
   std::ptrdiff_t pivoted_systems = 0;  // systems that Auto sent to the pivoting path
+  int parts = 1;                       // parts of a single long system solved in parallel
 };
 
 namespace detail {
@@ -79,6 +82,13 @@ namespace detail {
 // float, 2 threads, AMD EPYC Zen 5: 16 lanes 3x slower on columns, 128 lanes 1.5x slower.)
 template <class T>
 inline constexpr int kLanes = static_cast<int>(256 / sizeof(T));
+
+// A chunk with few systems (a single system, the tail of a batch) is solved one system at a
+// time: padding lanes would cost more than the vectors gain.
+template <class T>
+inline bool fills_lanes(std::ptrdiff_t systems) {
+  return 4 * systems >= kLanes<T>;
+}
 
 inline int resolve_threads(int threads) {
   if (threads < 0) throw InvalidArgument("threads", -1, -1, "must be >= 0 (0: all cores)");
@@ -174,7 +184,9 @@ void solve_one(const SystemView<T>& s, Strided<T> x, Method method, bool periodi
     }
   };
   const std::ptrdiff_t n = s.n;
-  const std::ptrdiff_t inner_work = std::max(cyclic_reduction_workspace(n), pivoting_workspace(n));
+  const std::ptrdiff_t inner_work = method == Method::Thomas     ? n
+                                    : method == Method::Pivoting ? pivoting_workspace(n)
+                                                                 : cyclic_reduction_workspace(n);
   work.resize(periodic ? periodic_workspace(n, inner_work) : inner_work);
   const std::ptrdiff_t bad = periodic ? detail::periodic(n, s.a, s.b, s.c, s.d, x, work.data(), inner)
                                       : inner(n, s.a, s.b, s.c, s.d, x, work.data());
@@ -183,20 +195,101 @@ void solve_one(const SystemView<T>& s, Strided<T> x, Method method, bool periodi
     if (!is_finite(x[i])) report_breakdown(s, system, -1, to_string(method));
 }
 
-// Classifies one system for the pivot-free methods; throws for non-finite coefficients and,
-// when `refuse` is set, for a matrix that is not diagonally dominant. Returns true if dominant.
+// Throws unless the matrix may go to a pivot-free method: for non-finite coefficients always,
+// and for a matrix that is not diagonally dominant when `refuse` is set. Returns whether it
+// is dominant.
 template <class T>
-bool check_system(const SystemView<T>& s, std::ptrdiff_t system, Method method, bool refuse) {
-  require_finite_matrix(s, system);
-  const std::ptrdiff_t row = first_non_dominant_row(s);
-  if (row >= 0 && refuse)
-    throw NumericalError(system, row,
+bool accept_dominance(const Dominance& d, std::ptrdiff_t system, Method method, bool refuse) {
+  if (!d.holds() && refuse)
+    throw NumericalError(system, d.first_row_failure,
                          std::string("the matrix is not diagonally dominant, so ") +
                              to_string(method) +
                              " (no pivoting) is unsafe; use Method::Pivoting or Method::Auto");
-  return row < 0;
+  return d.holds();
 }
 
+// Classifies one system for the pivot-free methods; see accept_dominance.
+template <class T>
+bool check_system(const SystemView<T>& s, std::ptrdiff_t system, Method method, bool refuse) {
+  require_finite_matrix(s, system);
+  return accept_dominance<T>(dominance(s, 0, s.n), system, method, refuse);
+}
+
+// check_system for one long system, its rows split over `threads`.
+template <class T>
+bool check_system_parallel(const SystemView<T>& s, std::ptrdiff_t system, Method method,
+                           bool refuse, int threads) {
+  std::vector<Dominance> parts(threads);
+  std::vector<std::exception_ptr> errors(threads);
+#pragma omp parallel for num_threads(threads) schedule(static)
+  for (int p = 0; p < threads; ++p) {
+    const std::ptrdiff_t begin = s.n * p / threads, end = s.n * (p + 1) / threads;
+    try {
+      require_finite_matrix(s, system, begin, end);
+      parts[p] = dominance(s, begin, end);
+    } catch (...) {
+      errors[p] = std::current_exception();
+    }
+  }
+  Dominance whole;
+  for (int p = 0; p < threads; ++p) {
+    if (errors[p]) std::rethrow_exception(errors[p]);
+    whole.merge(parts[p]);
+  }
+  return accept_dominance<T>(whole, system, method, refuse);
+}
+
+
+// Below this many rows a single system is not worth splitting across threads: the partitioned
+// method moves about twice the data of Thomas and needs a barrier.
+inline constexpr std::ptrdiff_t kPartitionedMinRows = std::ptrdiff_t(1) << 15;
+
+// Thomas on one long system, split into one part per thread (detail/partitioned.hpp).
+template <class T>
+int solve_partitioned(const SystemView<T>& s, Strided<T> x, int threads, std::ptrdiff_t system) {
+  const std::ptrdiff_t n = s.n;
+  const int parts = static_cast<int>(std::min<std::ptrdiff_t>(threads, n / kMinPartRows));
+  std::vector<std::ptrdiff_t> bounds(parts + 1), bad(parts + 1, -1);
+  for (int p = 0; p <= parts; ++p) bounds[p] = n * p / parts;
+  static thread_local AlignedBuffer<T> coupling;
+  coupling.resize(2 * n + partition_reduced_workspace(parts));
+  T* coupling_a = coupling.data();
+  T* coupling_c = coupling_a + n;
+  T* reduced_work = coupling_c + n;
+  std::vector<char> finite(parts, 1);
+  bool proceed = false;
+#pragma omp parallel num_threads(parts)
+  {
+#pragma omp for schedule(static)
+    for (int p = 0; p < parts; ++p)
+      bad[p] = partition_reduce(bounds[p], bounds[p + 1], n, s.a, s.b, s.c, s.d, x, coupling_a,
+                                coupling_c);
+#pragma omp single
+    {
+      proceed = std::all_of(bad.begin(), bad.begin() + parts, [](auto b) { return b < 0; });
+      if (proceed) {
+        bad[parts] = partition_solve_reduced<T>(parts, bounds.data(), x, coupling_a, coupling_c,
+                                                reduced_work);
+        proceed = bad[parts] < 0;
+      }
+    }
+    if (proceed) {
+#pragma omp for schedule(static)
+      for (int p = 0; p < parts; ++p) {
+        partition_finish(bounds[p], bounds[p + 1], x, coupling_a, coupling_c);
+        real_t<T> probe = 0;
+        for (std::ptrdiff_t i = bounds[p]; i < bounds[p + 1]; ++i) probe += magnitude(x[i]) * 0;
+        finite[p] = probe == 0;
+      }
+    }
+  }
+  if (coupling.size() * std::ptrdiff_t(sizeof(T)) > (std::ptrdiff_t(256) << 20)) coupling = {};
+  const auto first_bad = std::find_if(bad.begin(), bad.end(), [](auto b) { return b >= 0; });
+  if (first_bad != bad.end()) report_breakdown(s, system, *first_bad, "thomas (partitioned)");
+  if (std::find(finite.begin(), finite.end(), 0) != finite.end())
+    report_breakdown(s, system, -1, "thomas (partitioned)");
+  return parts;
+}
 
 // Thomas on a chunk of up to W systems, one SIMD lane each. Interleaved systems (image
 // columns) are solved where they lie; other layouts, partial chunks and in-place solves go
@@ -320,6 +413,15 @@ SolveReport solve(const T* sub, const T* diag, const T* super, const T* rhs, T* 
   std::ptrdiff_t pivoted = 0;
   std::mutex count_guard;
 
+  if (layout.count == 1 && threads > 1 && fast == Method::Thomas && !options.periodic &&
+      layout.n >= kPartitionedMinRows) {
+    const auto view = system_view(sub, diag, super, rhs, layout, 0, false);
+    if (!check || check_system_parallel(view, 0, method, method != Method::Auto, threads)) {
+      const int parts = solve_partitioned(view, Strided<T>{x, layout.row_stride}, threads, 0);
+      return {fast, 0, parts};
+    }
+  }
+
   auto solve_chunk = [&](std::ptrdiff_t first, std::ptrdiff_t systems, Scratch<T>& scratch) {
     bool all_dominant = true;
     bool dominant[W];
@@ -328,7 +430,8 @@ SolveReport solve(const T* sub, const T* diag, const T* super, const T* rhs, T* 
       dominant[l] = !check || check_system(view, first + l, method, method != Method::Auto);
       all_dominant = all_dominant && dominant[l];
     }
-    if (lanes && all_dominant && solve_lanes(sub, diag, super, rhs, x, layout, first, systems, scratch))
+    if (lanes && all_dominant && fills_lanes<T>(systems) &&
+        solve_lanes(sub, diag, super, rhs, x, layout, first, systems, scratch))
       return;
     // A lane broke down (re-solve one by one so the error names system and row), or this
     // chunk needs per-system methods.
@@ -382,13 +485,23 @@ SolveReport solve_diffusion(const real_t<T>* beta, const T* rhs, T* x, const Bat
   const std::ptrdiff_t n = layout.n;
 
   auto solve_chunk = [&](std::ptrdiff_t first, std::ptrdiff_t systems, Scratch<T>& scratch) {
-    if (lanes && solve_diffusion_lanes(beta, rhs, x, layout, first, systems, scratch)) return;
+    if (lanes && fills_lanes<T>(systems) &&
+        solve_diffusion_lanes(beta, rhs, x, layout, first, systems, scratch))
+      return;
     for (std::ptrdiff_t l = 0; l < systems; ++l) {
       const std::ptrdiff_t s = first + l;
       const std::ptrdiff_t o = layout.offset(s, 0);
       const Strided<const R> b{beta + o, layout.row_stride};
       require_valid_beta(b, n, options.periodic, s);
-      if (lanes) report_breakdown_diffusion(Strided<const T>{rhs + o, layout.row_stride}, n, s);
+      const Strided<const T> d{rhs + o, layout.row_stride};
+      const Strided<T> out{x + o, layout.row_stride};
+      if (lanes) {  // a system on its own, or the lanes broke down: the scalar kernel
+        scratch.real_work.resize(n);
+        diffusion_thomas(n, b, d, out, scratch.real_work.data());
+        for (std::ptrdiff_t i = 0; i < n; ++i)
+          if (!is_finite(out[i])) report_breakdown_diffusion(d, n, s);
+        continue;
+      }
       // Other methods, and periodic systems: expand to three diagonals.
       scratch.slab.resize(3 * n);
       T* a = scratch.slab.data();

@@ -19,10 +19,12 @@ struct SystemView {
   bool periodic;  // a[0] and c[n-1] are the corner entries
 };
 
-// Throws InvalidArgument naming the first non-finite coefficient of the matrix.
+// Throws InvalidArgument naming the first non-finite coefficient of rows [begin, end).
 template <class T>
-void require_finite_matrix(const SystemView<T>& s, std::ptrdiff_t system) {
-  for (std::ptrdiff_t i = 0; i < s.n; ++i) {
+void require_finite_matrix(const SystemView<T>& s, std::ptrdiff_t system,
+                           std::ptrdiff_t begin = 0, std::ptrdiff_t end = -1) {
+  if (end < 0) end = s.n;
+  for (std::ptrdiff_t i = begin; i < end; ++i) {
     const bool reads_a = i > 0 || s.periodic, reads_c = i + 1 < s.n || s.periodic;
     if (reads_a && !is_finite(s.a[i])) throw InvalidArgument("sub", system, i, "is not finite");
     if (!is_finite(s.b[i])) throw InvalidArgument("diag", system, i, "is not finite");
@@ -36,30 +38,49 @@ void require_finite_rhs(const SystemView<T>& s, std::ptrdiff_t system) {
     if (!is_finite(s.d[i])) throw InvalidArgument("rhs", system, i, "is not finite");
 }
 
-// Returns -1 if the matrix is diagonally dominant by rows or by columns (weakly, with a few
-// ulps of slack for rounding in the caller's own arithmetic); otherwise the first row that
-// breaks row dominance.
+// Diagonal dominance of rows [begin, end): the first row that is not dominant, and whether
+// every column of the range is. A matrix is safe for the pivot-free methods if it is dominant
+// by rows or by columns (weakly, with a few ulps of slack for rounding in the caller's own
+// arithmetic).
+struct Dominance {
+  std::ptrdiff_t first_row_failure = -1;
+  bool by_columns = true;
+
+  bool holds() const { return first_row_failure < 0 || by_columns; }
+  void merge(const Dominance& later) {
+    if (first_row_failure < 0) first_row_failure = later.first_row_failure;
+    by_columns = by_columns && later.by_columns;
+  }
+};
+
 template <class T>
-std::ptrdiff_t first_non_dominant_row(const SystemView<T>& s) {
+Dominance dominance(const SystemView<T>& s, std::ptrdiff_t begin, std::ptrdiff_t end) {
   using R = real_t<T>;
   const R slack = 1 - 4 * epsilon<T>;
   const std::ptrdiff_t n = s.n;
   auto entry_a = [&](std::ptrdiff_t i) { return (i > 0 || s.periodic) ? magnitude(s.a[i]) : R(0); };
   auto entry_c = [&](std::ptrdiff_t i) { return (i + 1 < n || s.periodic) ? magnitude(s.c[i]) : R(0); };
-  std::ptrdiff_t first_row_failure = -1;
-  bool by_columns = true;
-  for (std::ptrdiff_t i = 0; i < n; ++i) {
+  Dominance result;
+  for (std::ptrdiff_t i = begin; i < end; ++i) {
     const R diagonal = magnitude(s.b[i]);
-    if (first_row_failure < 0 && diagonal < slack * (entry_a(i) + entry_c(i))) first_row_failure = i;
+    if (result.first_row_failure < 0 && diagonal < slack * (entry_a(i) + entry_c(i)))
+      result.first_row_failure = i;
     // Column i holds c[i-1] above the diagonal and a[i+1] below it (wrapping when periodic).
     const std::ptrdiff_t above = i > 0 ? i - 1 : n - 1, below = i + 1 < n ? i + 1 : 0;
     R off = 0;
     if (i > 0 || s.periodic) off += entry_c(above);
     if (i + 1 < n || s.periodic) off += entry_a(below);
-    if (diagonal < slack * off) by_columns = false;
-    if (first_row_failure >= 0 && !by_columns) return first_row_failure;
+    if (diagonal < slack * off) result.by_columns = false;
+    if (!result.holds()) break;
   }
-  return -1;
+  return result;
+}
+
+// -1 if the matrix is dominant by rows or by columns; otherwise the first row that is not.
+template <class T>
+std::ptrdiff_t first_non_dominant_row(const SystemView<T>& s) {
+  const Dominance d = dominance(s, 0, s.n);
+  return d.holds() ? -1 : d.first_row_failure;
 }
 
 // Called after a kernel reported a breakdown at `row` (or -1 for a non-finite result):

@@ -18,16 +18,24 @@ std::ptrdiff_t thomas(std::ptrdiff_t n, Strided<const T> a, Strided<const T> b,
                       Strided<const T> c, Strided<const T> d, Strided<T> x, T* work) {
   T pivot = b[0];
   if (vanishes(pivot, magnitude(b[0]))) return 0;
+  // The previous row's values travel in registers, off the memory round trip.
+  T previous_x = T(0), previous_c = T(0);
   for (std::ptrdiff_t i = 0;; ++i) {
     const T inverse = T(1) / pivot;
-    x[i] = (i == 0 ? d[0] : d[i] - a[i] * x[i - 1]) * inverse;
+    previous_x = (i == 0 ? d[0] : d[i] - a[i] * previous_x) * inverse;
+    x[i] = previous_x;
     if (i == n - 1) break;
-    work[i] = c[i] * inverse;  // the super-diagonal of the unit upper factor
-    const T eliminated = a[i + 1] * work[i];
+    previous_c = c[i] * inverse;  // the super-diagonal of the unit upper factor
+    work[i] = previous_c;
+    const T eliminated = a[i + 1] * previous_c;
     pivot = b[i + 1] - eliminated;
     if (vanishes(pivot, magnitude(b[i + 1]) + magnitude(eliminated))) return i + 1;
   }
-  for (std::ptrdiff_t i = n - 2; i >= 0; --i) x[i] -= work[i] * x[i + 1];
+  T next = previous_x;
+  for (std::ptrdiff_t i = n - 2; i >= 0; --i) {
+    next = x[i] - work[i] * next;
+    x[i] = next;
+  }
   return -1;
 }
 
