@@ -184,15 +184,25 @@ void solve_one(const SystemView<T>& s, Strided<T> x, Method method, bool periodi
     }
   };
   const std::ptrdiff_t n = s.n;
+  // Inputs are checked up front: pivoting and the reductions can turn an infinite coefficient
+  // into a finite, meaningless answer, and a NaN in rhs is named here rather than after it has
+  // spread. A small cost next to these scalar kernels.
+  require_finite_matrix(s, system);
+  require_finite_rhs(s, system);
   const std::ptrdiff_t inner_work = method == Method::Thomas     ? n
                                     : method == Method::Pivoting ? pivoting_workspace(n)
                                                                  : cyclic_reduction_workspace(n);
-  work.resize(periodic ? periodic_workspace(n, inner_work) : inner_work);
-  const std::ptrdiff_t bad = periodic ? detail::periodic(n, s.a, s.b, s.c, s.d, x, work.data(), inner)
-                                      : inner(n, s.a, s.b, s.c, s.d, x, work.data());
+  // The solution is built in the workspace and copied out only on success, so a failed
+  // in-place solve leaves rhs as it was.
+  work.resize(n + (periodic ? periodic_workspace(n, inner_work) : inner_work));
+  const Strided<T> result{work.data(), 1};
+  T* kernel_work = work.data() + n;
+  const std::ptrdiff_t bad = periodic ? detail::periodic(n, s.a, s.b, s.c, s.d, result, kernel_work, inner)
+                                      : inner(n, s.a, s.b, s.c, s.d, result, kernel_work);
   if (bad >= 0) report_breakdown(s, system, bad, to_string(method));
   for (std::ptrdiff_t i = 0; i < n; ++i)
-    if (!is_finite(x[i])) report_breakdown(s, system, -1, to_string(method));
+    if (!is_finite(result[i])) report_breakdown(s, system, -1, to_string(method));
+  for (std::ptrdiff_t i = 0; i < n; ++i) x[i] = result[i];
 }
 
 // Throws unless the matrix may go to a pivot-free method: for non-finite coefficients always,
@@ -251,39 +261,46 @@ int solve_partitioned(const SystemView<T>& s, Strided<T> x, int threads, std::pt
   const int parts = static_cast<int>(std::min<std::ptrdiff_t>(threads, n / kMinPartRows));
   std::vector<std::ptrdiff_t> bounds(parts + 1), bad(parts + 1, -1);
   for (int p = 0; p <= parts; ++p) bounds[p] = n * p / parts;
-  static thread_local AlignedBuffer<T> coupling;
-  coupling.resize(2 * n + partition_reduced_workspace(parts));
-  T* coupling_a = coupling.data();
+  static thread_local AlignedBuffer<T> buffer;
+  buffer.resize(3 * n + partition_reduced_workspace(parts));
+  T* eliminated = buffer.data();
+  T* coupling_a = eliminated + n;
   T* coupling_c = coupling_a + n;
   T* reduced_work = coupling_c + n;
   std::vector<char> finite(parts, 1);
   bool proceed = false;
+  const bool in_place = x.data == s.d.data;
 #pragma omp parallel num_threads(parts)
   {
 #pragma omp for schedule(static)
     for (int p = 0; p < parts; ++p)
-      bad[p] = partition_reduce(bounds[p], bounds[p + 1], n, s.a, s.b, s.c, s.d, x, coupling_a,
-                                coupling_c);
+      bad[p] = partition_reduce(bounds[p], bounds[p + 1], n, s.a, s.b, s.c, s.d, eliminated,
+                                coupling_a, coupling_c);
 #pragma omp single
     {
       proceed = std::all_of(bad.begin(), bad.begin() + parts, [](auto b) { return b < 0; });
       if (proceed) {
-        bad[parts] = partition_solve_reduced<T>(parts, bounds.data(), x, coupling_a, coupling_c,
-                                                reduced_work);
+        bad[parts] = partition_solve_reduced<T>(parts, bounds.data(), eliminated, coupling_a,
+                                                coupling_c, reduced_work);
         proceed = bad[parts] < 0;
       }
     }
+    // In place, the solution is finished in the workspace and copied out only if it is
+    // finite, so that an overflow leaves rhs as it was.
+    const Strided<T> target = in_place ? Strided<T>{eliminated, 1} : x;
     if (proceed) {
 #pragma omp for schedule(static)
-      for (int p = 0; p < parts; ++p) {
-        partition_finish(bounds[p], bounds[p + 1], x, coupling_a, coupling_c);
-        real_t<T> probe = 0;
-        for (std::ptrdiff_t i = bounds[p]; i < bounds[p + 1]; ++i) probe += magnitude(x[i]) * 0;
-        finite[p] = probe == 0;
+      for (int p = 0; p < parts; ++p)
+        finite[p] = partition_finish(bounds[p], bounds[p + 1], eliminated, coupling_a,
+                                     coupling_c, target);
+      if (in_place && std::find(finite.begin(), finite.end(), 0) == finite.end()) {
+#pragma omp for schedule(static)
+        for (int p = 0; p < parts; ++p)
+          for (std::ptrdiff_t i = bounds[p]; i < bounds[p + 1]; ++i) x[i] = eliminated[i];
       }
     }
   }
-  if (coupling.size() * std::ptrdiff_t(sizeof(T)) > (std::ptrdiff_t(256) << 20)) coupling = {};
+  if (buffer.size() * std::ptrdiff_t(sizeof(T)) > (std::ptrdiff_t(256) << 20)) buffer = {};
   const auto first_bad = std::find_if(bad.begin(), bad.end(), [](auto b) { return b >= 0; });
   if (first_bad != bad.end()) report_breakdown(s, system, *first_bad, "thomas (partitioned)");
   if (std::find(finite.begin(), finite.end(), 0) != finite.end())
@@ -359,16 +376,6 @@ void require_valid_beta(Strided<const R> beta, std::ptrdiff_t n, bool periodic,
   }
 }
 
-// Called when the diffusion lanes broke down although beta is valid: the rhs is at fault, or
-// the solution overflowed.
-template <class T>
-[[noreturn]] void report_breakdown_diffusion(Strided<const T> rhs, std::ptrdiff_t n,
-                                             std::ptrdiff_t system) {
-  for (std::ptrdiff_t i = 0; i < n; ++i)
-    if (!is_finite(rhs[i])) throw InvalidArgument("rhs", system, i, "is not finite");
-  throw NumericalError(system, -1, "the solution overflowed: rhs is too large for this type");
-}
-
 // The three diagonals of the diffusion system (seed 000 eq. 3.10).
 template <class R, class T>
 void expand_diffusion(Strided<const R> beta, std::ptrdiff_t n, bool periodic, T* a, T* b, T* c) {
@@ -387,8 +394,7 @@ void expand_diffusion(Strided<const R> beta, std::ptrdiff_t n, bool periodic, T*
 // of `layout`. sub[0] and super[n-1] are not read unless options.periodic. x may be rhs
 // (in place) but must not overlap the diagonals. Throws InvalidArgument for bad arguments and
 // NumericalError for a singular system or a method that is unsafe for it. On an exception the
-// contents of x are unspecified, except that an in-place solve by Thomas leaves the systems it
-// could not solve as they were.
+// contents of x are unspecified, and an in-place solve leaves rhs as it was.
 template <class T>
 SolveReport solve(const T* sub, const T* diag, const T* super, const T* rhs, T* x,
                   const BatchLayout& layout, const SolveOptions& options = {}) {
@@ -496,10 +502,13 @@ SolveReport solve_diffusion(const real_t<T>* beta, const T* rhs, T* x, const Bat
       const Strided<const T> d{rhs + o, layout.row_stride};
       const Strided<T> out{x + o, layout.row_stride};
       if (lanes) {  // a system on its own, or the lanes broke down: the scalar kernel
+        for (std::ptrdiff_t i = 0; i < n; ++i)
+          if (!is_finite(d[i])) throw InvalidArgument("rhs", s, i, "is not finite");
         scratch.real_work.resize(n);
         diffusion_thomas(n, b, d, out, scratch.real_work.data());
         for (std::ptrdiff_t i = 0; i < n; ++i)
-          if (!is_finite(out[i])) report_breakdown_diffusion(d, n, s);
+          if (!is_finite(out[i]))
+            throw NumericalError(s, i, "the solution overflowed: rhs is too large for this type");
         continue;
       }
       // Other methods, and periodic systems: expand to three diagonals.

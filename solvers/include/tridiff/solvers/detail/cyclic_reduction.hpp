@@ -46,6 +46,8 @@ std::ptrdiff_t parallel_cyclic_reduction(std::ptrdiff_t m, Level<T> now, T* spar
   for (std::ptrdiff_t s = 1; s < m; s *= 2) {
     for (std::ptrdiff_t i = 0; i < m; ++i) {
       const bool left = i - s >= 0, right = i + s < m;
+      if (left && now.b[i - s] == T(0)) return i - s;  // name the zero pivot, not its victim
+      if (right && now.b[i + s] == T(0)) return i + s;
       const T alpha = left ? -now.a[i] / now.b[i - s] : T(0);
       const T gamma = right ? -now.c[i] / now.b[i + s] : T(0);
       const T from_left = left ? alpha * now.c[i - s] : T(0);

@@ -21,14 +21,14 @@ namespace tridiff::detail {
 // A part needs at least 3 rows: its first row must not be its last row's neighbour.
 inline constexpr std::ptrdiff_t kMinPartRows = 3;
 
-// Step 1 on rows [s, e) of a system of n rows. The eliminated right-hand side goes to x (which
-// may alias d); a' and c' to `coupling_a` and `coupling_c` (indexed like the rows).
+// Step 1 on rows [s, e) of a system of n rows. The eliminated right-hand side goes to
+// `eliminated`, a' and c' to `coupling_a` and `coupling_c` (all indexed like the rows), so that
+// x is written only by step 3, once the solve is known to succeed.
 // Returns -1, or the row whose pivot vanished.
 template <class T>
 std::ptrdiff_t partition_reduce(std::ptrdiff_t s, std::ptrdiff_t e, std::ptrdiff_t n,
                                 Strided<const T> a, Strided<const T> b, Strided<const T> c,
-                                Strided<const T> d, Strided<T> x, T* coupling_a,
-                                T* coupling_c) {
+                                Strided<const T> d, T* x, T* coupling_a, T* coupling_c) {
   auto sub = [&](std::ptrdiff_t i) { return i > 0 ? a[i] : T(0); };
   auto super = [&](std::ptrdiff_t i) { return i + 1 < n ? c[i] : T(0); };
   for (std::ptrdiff_t i = s; i < s + 2; ++i) {  // the first two rows are only normalised
@@ -74,11 +74,12 @@ std::ptrdiff_t partition_reduce(std::ptrdiff_t s, std::ptrdiff_t e, std::ptrdiff
 inline std::ptrdiff_t partition_reduced_workspace(std::ptrdiff_t parts) { return 10 * parts; }
 
 // Step 2: the boundary rows of the P parts (first, last, first, last, ...) as one tridiagonal
-// system with unit diagonal; solves it and writes the 2P boundary unknowns into x.
+// system with unit diagonal; solves it and writes the 2P boundary unknowns into
+// `eliminated` (the x of step 1).
 // `bounds` holds P + 1 part boundaries; `work` holds partition_reduced_workspace(P) scalars.
 template <class T>
 std::ptrdiff_t partition_solve_reduced(std::ptrdiff_t parts, const std::ptrdiff_t* bounds,
-                                       Strided<T> x, const T* coupling_a, const T* coupling_c,
+                                       T* x, const T* coupling_a, const T* coupling_c,
                                        T* work) {
   const std::ptrdiff_t m = 2 * parts;
   T* sub = work;
@@ -106,13 +107,21 @@ std::ptrdiff_t partition_solve_reduced(std::ptrdiff_t parts, const std::ptrdiff_
   return -1;
 }
 
-// Step 3 on rows [s, e): the interior rows from the part's two boundary unknowns.
+// Step 3 on rows [s, e): every row from the part's two boundary unknowns, into x. Returns
+// false if the solution is not finite.
 template <class T>
-void partition_finish(std::ptrdiff_t s, std::ptrdiff_t e, Strided<T> x, const T* coupling_a,
-                      const T* coupling_c) {
-  const T first = x[s], last = x[e - 1];
-  for (std::ptrdiff_t i = s + 1; i < e - 1; ++i)
-    x[i] -= coupling_a[i] * first + coupling_c[i] * last;
+bool partition_finish(std::ptrdiff_t s, std::ptrdiff_t e, const T* eliminated,
+                      const T* coupling_a, const T* coupling_c, Strided<T> x) {
+  const T first = eliminated[s], last = eliminated[e - 1];
+  real_t<T> probe = 0;
+  for (std::ptrdiff_t i = s; i < e; ++i) {
+    const bool boundary = i == s || i == e - 1;
+    const T value =
+        boundary ? eliminated[i] : eliminated[i] - coupling_a[i] * first - coupling_c[i] * last;
+    x[i] = value;
+    probe += magnitude(value) * 0;
+  }
+  return probe == 0;
 }
 
 }  // namespace tridiff::detail

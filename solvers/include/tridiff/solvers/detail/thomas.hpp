@@ -55,7 +55,7 @@ bool thomas_lanes(std::ptrdiff_t n, const T* a, const T* b, const T* c, const T*
     margin[l] = magnitude(b[l]) * (1 - tolerance);
     inverse[l] = T(1) / b[l];
     previous_x[l] = T(0);
-    probe[l] = 0;
+    probe[l] = magnitude(b[l]) * 0;  // an infinite first pivot would pass unseen otherwise
   }
   for (std::ptrdiff_t i = 0; i < n; ++i) {
     const std::ptrdiff_t row = i * row_stride;
