@@ -311,13 +311,16 @@ int solve_partitioned(const SystemView<T>& s, Strided<T> x, int threads, std::pt
 // Thomas on a chunk of up to W systems, one SIMD lane each. Interleaved systems (image
 // columns) are solved where they lie; other layouts, partial chunks and in-place solves go
 // through a lane-contiguous slab, so that a failed in-place solve leaves rhs intact.
-// Returns false if some lane broke down.
+// With `check`, the lanes are first checked for finite, dominant matrices. Returns false if
+// some lane failed the check or broke down: the caller then goes system by system.
 template <class T>
 bool solve_lanes(const T* a, const T* b, const T* c, const T* d, T* x, const BatchLayout& layout,
-                 std::ptrdiff_t first, std::ptrdiff_t systems, Scratch<T>& scratch) {
+                 std::ptrdiff_t first, std::ptrdiff_t systems, bool check, Scratch<T>& scratch) {
   constexpr int W = kLanes<T>;
   const std::ptrdiff_t n = layout.n, o = layout.offset(first, 0);
   if (layout.system_stride == 1 && systems == W && x != d) {
+    if (check && !lanes_finite_and_dominant<T, W>(n, a + o, b + o, c + o, layout.row_stride))
+      return false;
     scratch.work.resize(n * W);
     return thomas_lanes<T, W>(n, a + o, b + o, c + o, d + o, x + o, layout.row_stride,
                               scratch.work.data());
@@ -333,6 +336,7 @@ bool solve_lanes(const T* a, const T* b, const T* c, const T* d, T* x, const Bat
   gather<T, W>(b, layout, first, lanes, T(1), sb);
   gather<T, W>(c, layout, first, lanes, T(0), sc);
   gather<T, W>(d, layout, first, lanes, T(0), sd);
+  if (check && !lanes_finite_and_dominant<T, W>(n, sa, sb, sc, W)) return false;
   if (!thomas_lanes<T, W>(n, sa, sb, sc, sd, sd, W, sw)) return false;
   scatter<T, W>(sd, layout, first, lanes, x);
   return true;
@@ -429,16 +433,14 @@ SolveReport solve(const T* sub, const T* diag, const T* super, const T* rhs, T* 
   }
 
   auto solve_chunk = [&](std::ptrdiff_t first, std::ptrdiff_t systems, Scratch<T>& scratch) {
-    bool all_dominant = true;
+    if (lanes && fills_lanes<T>(systems) &&
+        solve_lanes(sub, diag, super, rhs, x, layout, first, systems, check, scratch))
+      return;
     bool dominant[W];
     for (std::ptrdiff_t l = 0; l < systems; ++l) {
       const auto view = system_view(sub, diag, super, rhs, layout, first + l, options.periodic);
       dominant[l] = !check || check_system(view, first + l, method, method != Method::Auto);
-      all_dominant = all_dominant && dominant[l];
     }
-    if (lanes && all_dominant && fills_lanes<T>(systems) &&
-        solve_lanes(sub, diag, super, rhs, x, layout, first, systems, scratch))
-      return;
     // A lane broke down (re-solve one by one so the error names system and row), or this
     // chunk needs per-system methods.
     std::ptrdiff_t local_pivoted = 0;
