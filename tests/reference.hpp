@@ -157,6 +157,17 @@ long double unit_roundoff() {
   return std::numeric_limits<real_t<T>>::epsilon() / 2;
 }
 
+// The normwise backward error every method must meet on a dominant matrix: a small multiple
+// of the unit roundoff, times the number of reduction levels for the cyclic-reduction family,
+// whose rows pass through log2(n) updates.
+template <class T>
+long double backward_bound(Method method, std::ptrdiff_t n) {
+  const long double levels = std::ceil(std::log2(static_cast<long double>(n) + 1));
+  const bool reduces = method == Method::CyclicReduction ||
+                       method == Method::ParallelCyclicReduction || method == Method::Hybrid;
+  return 16 * unit_roundoff<T>() * (reduces ? 1 + levels : 1);
+}
+
 // Solves s with `options`, out of place, and returns x.
 template <class T>
 std::vector<T> solve_system(const System<T>& s, SolveOptions options) {

@@ -12,16 +12,6 @@ namespace {
 
 constexpr std::ptrdiff_t kSizes[] = {1, 2, 3, 4, 5, 7, 8, 15, 16, 17, 31, 32, 33, 1000, 65537};
 
-// Normwise backward error bound: a small multiple of the unit roundoff, times the number of
-// reduction levels for the cyclic-reduction family, whose rows pass through log2(n) updates.
-template <class T>
-long double backward_bound(Method method, std::ptrdiff_t n) {
-  const long double levels = std::ceil(std::log2(static_cast<long double>(n) + 1));
-  const bool reduces = method == Method::CyclicReduction ||
-                       method == Method::ParallelCyclicReduction || method == Method::Hybrid;
-  return 16 * unit_roundoff<T>() * (reduces ? 1 + levels : 1);
-}
-
 template <class T>
 class SolverAccuracy : public ::testing::Test {};
 using Scalars = ::testing::Types<float, double, std::complex<float>, std::complex<double>>;

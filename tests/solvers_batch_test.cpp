@@ -27,16 +27,6 @@ using Scalars = ::testing::Types<float, double, std::complex<float>, std::comple
 constexpr std::ptrdiff_t kCounts[] = {1, 3, 17, 33, 64, 100};
 constexpr std::ptrdiff_t kRows[] = {1, 2, 5, 40};
 
-// The backward-error bound of the accuracy test: a small multiple of the unit roundoff, times
-// the number of reduction levels for the cyclic-reduction family.
-template <class T>
-long double backward_bound(Method method, std::ptrdiff_t n) {
-  const long double levels = std::ceil(std::log2(static_cast<long double>(n) + 1));
-  const bool reduces = method == Method::CyclicReduction ||
-                       method == Method::ParallelCyclicReduction || method == Method::Hybrid;
-  return 16 * unit_roundoff<T>() * (reduces ? 1 + levels : 1);
-}
-
 // ---------------------------------------------------------------------------------------------
 // Layouts and batch storage
 
