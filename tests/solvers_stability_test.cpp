@@ -54,18 +54,10 @@ bool dominant_by_rows_or_columns(const System<T>& s) {
   return by_rows || by_columns;
 }
 
-// Backward error bound for a pivot-free method on a dominant matrix, the bound of
-// solvers_accuracy_test.cpp: LU without pivoting of a matrix dominant by rows or columns has
-// |L||U| <= 3|A| (Higham, Accuracy and Stability, Thm 9.12), so its normwise backward error is
-// a small multiple of u; cyclic reduction adds one round of updates per level, log2(n) levels.
-template <class T>
-long double pivot_free_backward_bound(Method method, std::ptrdiff_t n) {
-  const long double levels = std::ceil(std::log2(static_cast<long double>(n) + 1));
-  const bool reduces = method == Method::CyclicReduction ||
-                       method == Method::ParallelCyclicReduction || method == Method::Hybrid;
-  return 16 * unit_roundoff<T>() * (reduces ? 1 + levels : 1);
-}
-
+// The backward-error bound of the pivot-free methods on a dominant matrix is reference.hpp's
+// backward_bound: LU without pivoting of a matrix dominant by rows or columns has
+// |L||U| <= 3|A| (Higham, Accuracy and Stability, Thm 9.12), and cyclic reduction adds one
+// round of updates per level.
 constexpr Method kPivotFreeMethods[] = {Method::Thomas, Method::CyclicReduction,
                                         Method::ParallelCyclicReduction, Method::Hybrid};
 
@@ -200,7 +192,7 @@ TYPED_TEST(Stability, PivotFreeMethodsRefuseNonDominantMatrices) {
 }
 
 // On dominant matrices the pivot-free methods must accept the matrix and either solve it, with
-// a backward error within pivot_free_backward_bound and a forward error within 10x LAPACK's
+// a backward error within backward_bound and a forward error within 10x LAPACK's
 // (where ?gtsv gives an answer), or throw NumericalError for a vanishing pivot or an overflow
 // (CR, PCR and the hybrid do on rows_scaled_1e+-30 in float: their multipliers a[i]/b[i-1],
 // quotients of rows 1e60 apart, overflow). They must never return a non-finite x, refuse a
@@ -218,7 +210,7 @@ TYPED_TEST(Stability, PivotFreeMethodsSolveDominantMatricesWithinBoundOrThrow) {
         const Measurement ours = measure_tridiff(system, method, reference);
         if (ours.outcome == Outcome::Singular || ours.outcome == Outcome::Overflow) continue;
         ASSERT_EQ(ours.outcome, Outcome::Solved) << to_string(ours.outcome) << ": " << ours.message;
-        EXPECT_LE(ours.backward, pivot_free_backward_bound<T>(method, n));
+        EXPECT_LE(ours.backward, backward_bound<T>(method, n));
         if (lapack.outcome == Outcome::Solved) {
           EXPECT_LE(ours.forward, ten_times_lapack<T>(lapack.forward))
               << "LAPACK forward error " << static_cast<double>(lapack.forward);
