@@ -9,6 +9,8 @@ packages=(
   libgtest-dev              # tests
   libbenchmark-dev          # benchmarks
   liblapack-dev             # tests and benchmarks only: LAPACK ?gtsv as the yardstick
+  libopenimageio-dev        # image reading and writing
+  openimageio-tools         # Debian 12: OpenImageIO's CMake config fails without the tools
 )
 
 missing=()

@@ -1,0 +1,119 @@
+// links_from_pixels: a template, so the value-to-conductance map inlines into the loop.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "tridiff/solvers/solve.hpp"  // resolve threads the same way as the solvers
+
+namespace tridiff {
+
+// The slow path: names the first pixel whose conductance is negative or not finite.
+template <class ToLink>
+[[noreturn]] void throw_bad_conductance(ConstPlane value, ToLink to_link) {
+  for (std::ptrdiff_t y = 0; y < value.height(); ++y)
+    for (std::ptrdiff_t x = 0; x < value.width(); ++x) {
+      const float k = to_link(value(x, y));
+      if (!(k >= 0) || !std::isfinite(k))
+        throw InvalidArgument("value", -1, -1,
+                              "pixel (" + std::to_string(x) + ", " + std::to_string(y) +
+                                  "): " + std::to_string(value(x, y)) + " maps to conductance " +
+                                  std::to_string(k) + "; it must be finite and >= 0");
+    }
+  throw InvalidArgument("value", -1, -1, "a conductance is not finite and >= 0");
+}
+
+template <class ToLink>
+LinkField links_from_pixels(ConstPlane value, ToLink to_link, int threads) {
+  const std::ptrdiff_t width = value.width(), height = value.height();
+  LinkField links(width, height);
+  Plane horizontal = links.horizontal(), vertical = links.vertical();
+  const int team = detail::resolve_threads(threads);
+  constexpr std::ptrdiff_t tile = LinkField::kTile;
+  const std::ptrdiff_t tiles_x = links.tiles_x();
+  // Per tile: the largest horizontal and vertical link, found while the links are written,
+  // and a probe (sum of 0 * link) that is non-zero only if to_link gave NaN or infinity.
+  std::vector<float> h_max(tiles_x * links.tiles_y(), 0.f), v_max(h_max.size(), 0.f);
+  std::vector<float> smallest(links.tiles_y(), 0.f), probe(links.tiles_y(), 0.f);
+  bool bad_value = false;
+#pragma omp parallel num_threads(team) reduction(|| : bad_value)
+  {
+    std::vector<float> here(width), below(width);  // per-pixel conductances of rows y, y + 1
+#pragma omp for schedule(static)
+    for (std::ptrdiff_t ty = 0; ty < links.tiles_y(); ++ty) {
+      float low = 0, sum = 0;
+      for (std::ptrdiff_t y = ty * tile; y < std::min(height, (ty + 1) * tile); ++y) {
+        const float* row = y == ty * tile ? value.row(y) : nullptr;
+        if (row) {
+#pragma omp simd
+          for (std::ptrdiff_t x = 0; x < width; ++x) here[x] = to_link(row[x]);
+        }
+        else
+          here.swap(below);  // row y's conductances were computed as "below" of row y - 1
+        float* h = horizontal.row(y);
+        float* v = vertical.row(y);
+        const bool has_below = y + 1 < height;
+        if (has_below) {
+          const float* next = value.row(y + 1);
+#pragma omp simd
+          for (std::ptrdiff_t x = 0; x < width; ++x) below[x] = to_link(next[x]);
+        }
+        for (std::ptrdiff_t tx = 0; tx < tiles_x; ++tx) {
+          // A tile whose pixels (and the pixels right of and below it) all have conductance
+          // zero keeps its links at zero without writing them: in-focus parts of a frame cost
+          // one read of `value` and nothing else.
+          const std::ptrdiff_t x0 = tx * tile, x1 = std::min(width, x0 + tile);
+          const std::ptrdiff_t x1_right = std::min(width, x1 + 1);
+          // Conductances must be finite and >= 0: a tile is skipped only if every one is
+          // exactly zero; a bad one marks the call, which then names the pixel.
+          float any = 0, lowest = 0, probe_here = 0;
+#pragma omp simd reduction(max : any) reduction(min : lowest) reduction(+ : probe_here)
+          for (std::ptrdiff_t x = x0; x < x1_right; ++x) {
+            any = std::max(any, here[x]);
+            lowest = std::min(lowest, here[x]);
+            probe_here += 0.f * here[x];
+          }
+          if (has_below) {
+#pragma omp simd reduction(max : any) reduction(min : lowest) reduction(+ : probe_here)
+            for (std::ptrdiff_t x = x0; x < x1; ++x) {
+              any = std::max(any, below[x]);
+              lowest = std::min(lowest, below[x]);
+              probe_here += 0.f * below[x];
+            }
+          }
+          if (lowest < 0 || probe_here != 0) bad_value = true;
+          if (any == 0) continue;
+          float hm = h_max[ty * tiles_x + tx], vm = v_max[ty * tiles_x + tx];
+          const std::ptrdiff_t h_end = std::min(x1, width - 1);  // the last column has no link
+#pragma omp simd reduction(max : hm) reduction(min : low) reduction(+ : sum)
+          for (std::ptrdiff_t x = x0; x < h_end; ++x) {
+            h[x] = std::min(here[x], here[x + 1]);
+            hm = std::max(hm, h[x]);
+            low = std::min(low, h[x]);
+            sum += 0.f * h[x];
+          }
+          if (has_below) {
+#pragma omp simd reduction(max : vm) reduction(min : low) reduction(+ : sum)
+            for (std::ptrdiff_t x = x0; x < x1; ++x) {
+              v[x] = std::min(here[x], below[x]);
+              vm = std::max(vm, v[x]);
+              low = std::min(low, v[x]);
+              sum += 0.f * v[x];
+            }
+          }
+          h_max[ty * tiles_x + tx] = hm;
+          v_max[ty * tiles_x + tx] = vm;
+        }
+      }
+      smallest[ty] = low;
+      probe[ty] = sum;
+    }
+  }
+  if (bad_value) throw_bad_conductance(value, to_link);
+  links.set_activity(h_max, v_max, smallest, probe);
+  return links;
+}
+
+}  // namespace tridiff

@@ -1,0 +1,42 @@
+// Circle-of-confusion models: the physical thin lens (seed 000 eq. 3.2) and the artist's
+// piecewise-linear curve (seed 002 §28.5.3). Both give a signed CoC diameter in pixels:
+// negative in front of the focus (near field), positive behind it (far field).
+#pragma once
+
+#include "tridiff/image/image.hpp"
+
+namespace tridiff {
+
+struct ThinLens {
+  float focal_length_mm = 50.f;
+  float f_number = 2.8f;
+  float focus_distance_m = 3.2f;
+  float sensor_width_mm = 36.f;  // full frame; the image width maps onto it
+  float max_coc_px = 64.f;       // |CoC| is clamped to this (a blur budget, as in seed 000 §5.2)
+};
+
+// Seed 002 §28.5.3: blur radii at the near and far ends, falling linearly to zero across
+// [near_start, near_end] and rising across [far_start, far_end]; distances in metres. A
+// degenerate region (end not beyond start, or a zero radius) has no blur, so artists can blur
+// only the foreground or only the background.
+struct ArtistCurve {
+  float near_start_m = 0.f, near_end_m = 0.f;
+  float far_start_m = 0.f, far_end_m = 0.f;
+  float near_radius_px = 0.f, far_radius_px = 0.f;
+};
+
+// Throws InvalidArgument naming the bad parameter.
+void validate(const ThinLens& lens);
+void validate(const ArtistCurve& curve);
+
+// Signed CoC diameter in pixels of a point at `distance_m` for an image `image_width_px` wide.
+// Thin lens: c = A f |d - d_f| / (d (d_f - f)) on the sensor, A = f / N (seed 000 eq. 3.2
+// rewritten), scaled by pixels per millimetre of sensor.
+float coc_thin_lens(float distance_m, const ThinLens& lens, std::ptrdiff_t image_width_px);
+float coc_artist_curve(float distance_m, const ArtistCurve& curve);
+
+// The CoC map of a depth map (linear distance in metres, every value finite and > 0).
+void coc_thin_lens(Plane coc, ConstPlane depth, const ThinLens& lens, int threads = 0);
+void coc_artist_curve(Plane coc, ConstPlane depth, const ArtistCurve& curve, int threads = 0);
+
+}  // namespace tridiff

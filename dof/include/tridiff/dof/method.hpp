@@ -1,0 +1,63 @@
+// Depth-of-field methods and their registry: every method is registered once (name, what it
+// handles, its cost) so that the command line, the tests and the benchmarks enumerate the same
+// list. Adding a method is one new file plus one line in registry.cpp.
+#pragma once
+
+#include <functional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "tridiff/image/image.hpp"
+
+namespace tridiff {
+
+struct DofSettings {
+  int threads = 0;                 // 0: all cores
+  bool skip_in_focus = true;       // false: every pixel takes the full path (the reference)
+  bool layers = false;             // blur the near field as its own layer (Kass et al. 2006)
+  float in_focus_coc_px = 1.f;     // |CoC| below this (a sub-pixel blur) counts as sharp
+  std::function<void(double)> progress;  // fraction done, 0..1; may be empty
+};
+
+struct DofStage {
+  std::string name;
+  double seconds = 0;
+};
+
+struct DofReport {
+  std::vector<DofStage> stages;
+  double skipped_fraction = 0;  // of the per-pixel work of the diffusion passes
+  int explicit_steps = 0;       // explicit methods: forward-Euler steps taken
+  bool layered = false;         // whether the near field was blurred as its own layer
+  std::string notes;
+};
+
+// out = `color` (linear light, any channel count) with depth of field for the signed CoC
+// diameters `coc` (pixels; negative in front of the focus). out is reallocated as needed.
+using DofRun = void (*)(Image& out, const Image& color, ConstPlane coc, const DofSettings&,
+                        DofReport&);
+
+struct DofMethod {
+  std::string_view name;
+  std::string_view summary;
+  bool blurs_foreground;   // the near field's blur spreads over what lies behind it
+                           // (for the diffusion methods: with layers)
+  bool unbounded_blur;     // any CoC at the same cost per pixel
+  std::string_view cost;   // how the work grows
+  DofRun run;
+};
+
+// Every registered method, in a fixed order.
+std::span<const DofMethod> dof_methods();
+// The method called `name`; InvalidArgument listing the known names otherwise.
+const DofMethod& find_dof_method(std::string_view name);
+
+// Checks colour and CoC before a method runs: same size, every value finite (InvalidArgument
+// naming the pixel and channel otherwise). validate_coc checks the sizes and the CoC only,
+// for methods that check the colour as they go (adi checks every pixel it solves or copies).
+void validate_dof_input(const Image& color, ConstPlane coc);
+void validate_coc(const Image& color, ConstPlane coc);
+
+}  // namespace tridiff

@@ -1,0 +1,15 @@
+// The `adi` method: one ADI step of implicit heat diffusion with conductances from the CoC
+// (seed 000 §3.5, §5.3.5; Kass, Lefohn & Owens 2006). Any blur size at the same cost.
+#include "diffusion_dof.hpp"
+#include "tridiff/diffusion/adi.hpp"
+
+namespace tridiff::dof_detail {
+
+void run_adi(Image& out, const Image& color, ConstPlane coc, const DofSettings& settings,
+             DofReport& report) {
+  diffusion_dof(out, color, coc, settings, report,
+                [](Image& dst, const Image& src, const LinkField& beta,
+                   const DiffusionOptions& options) { return diffuse_adi(dst, src, beta, options); });
+}
+
+}  // namespace tridiff::dof_detail

@@ -1,0 +1,78 @@
+// The registry of depth-of-field methods: one line per method.
+#include <array>
+#include <cmath>
+#include <string>
+
+#include "tridiff/dof/method.hpp"
+
+namespace tridiff {
+namespace dof_detail {
+void run_adi(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
+void run_mpad(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
+}  // namespace dof_detail
+
+namespace {
+
+constexpr std::array kMethods{
+    DofMethod{"adi", "implicit heat diffusion, one ADI step of tridiagonal solves (seed 000 §3.5)",
+              false, true, "O(pixels), independent of the CoC", dof_detail::run_adi},
+    DofMethod{"mpad", "multi-pass anisotropic diffusion, explicit steps (seed 000 §5.3.4)",
+              false, false, "O(pixels x max CoC^2 / 8) steps", dof_detail::run_mpad},
+};
+
+}  // namespace
+
+std::span<const DofMethod> dof_methods() { return kMethods; }
+
+const DofMethod& find_dof_method(std::string_view name) {
+  std::string known;
+  for (const DofMethod& method : kMethods) {
+    if (method.name == name) return method;
+    known += (known.empty() ? "" : ", ") + std::string(method.name);
+  }
+  throw InvalidArgument("method", -1, -1,
+                        "unknown method '" + std::string(name) + "' (known: " + known + ")");
+}
+
+namespace {
+
+[[noreturn]] void bad_pixel(const char* what, std::ptrdiff_t x, std::ptrdiff_t y, int c) {
+  throw InvalidArgument(what, -1, -1,
+                        "pixel (" + std::to_string(x) + ", " + std::to_string(y) + ")" +
+                            (c >= 0 ? ", channel " + std::to_string(c) : std::string()) +
+                            " is not finite");
+}
+
+// A fast pass (probe = sum of 0 * v is zero unless some v is NaN or infinite), then, only if
+// it failed, a slow pass that names the first bad pixel.
+void require_finite(ConstPlane plane, const char* what, int channel) {
+  float probe = 0;
+  for (std::ptrdiff_t y = 0; y < plane.height(); ++y) {
+    const float* row = plane.row(y);
+#pragma omp simd reduction(+ : probe)
+    for (std::ptrdiff_t x = 0; x < plane.width(); ++x) probe += 0.f * row[x];
+  }
+  if (probe == 0) return;
+  for (std::ptrdiff_t y = 0; y < plane.height(); ++y)
+    for (std::ptrdiff_t x = 0; x < plane.width(); ++x)
+      if (!std::isfinite(plane(x, y))) bad_pixel(what, x, y, channel);
+}
+
+}  // namespace
+
+void validate_dof_input(const Image& color, ConstPlane coc) {
+  validate_coc(color, coc);
+  for (int c = 0; c < color.channels(); ++c) require_finite(color.plane(c), "color", c);
+}
+
+void validate_coc(const Image& color, ConstPlane coc) {
+  if (coc.width() != color.width() || coc.height() != color.height())
+    throw InvalidArgument("coc", -1, -1,
+                          "is " + std::to_string(coc.width()) + " x " +
+                              std::to_string(coc.height()) + ", the colour image is " +
+                              std::to_string(color.width()) + " x " +
+                              std::to_string(color.height()));
+  require_finite(coc, "coc", -1);
+}
+
+}  // namespace tridiff

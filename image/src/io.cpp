@@ -1,0 +1,465 @@
+// Image files through OpenImageIO: colour read into linear light, depth read as distance, and
+// writes that leave either the whole new file or the old one (temporary file + rename).
+#include "tridiff/image/io.hpp"
+
+#include <OpenImageIO/imageio.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cctype>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <limits>
+#include <sstream>
+#include <system_error>
+
+#include "tridiff/image/color.hpp"
+
+namespace tridiff {
+namespace {
+
+namespace fs = std::filesystem;
+
+[[noreturn]] void fail(const std::string& path, const std::string& message) {
+  throw ImageIoError("tridiff: " + path + ": " + message);
+}
+
+std::string lowercase(std::string text) {
+  std::transform(text.begin(), text.end(), text.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return text;
+}
+
+std::string join(const std::vector<std::string>& names) {
+  std::string joined;
+  for (const std::string& name : names) joined += (joined.empty() ? "" : ", ") + name;
+  return joined;
+}
+
+std::string quote(const std::string& text) { return "'" + text + "'"; }
+
+// The lowercase extension without its dot ("png"), empty when there is none.
+std::string extension_of(const std::string& path) {
+  const std::string extension = fs::path(path).extension().string();
+  return extension.empty() ? extension : lowercase(extension.substr(1));
+}
+
+// OpenImageIO keeps errors both on the object and per thread; reading (and so clearing) both
+// keeps a stale message from showing up in a later, unrelated error.
+std::string oiio_error(const std::string& object_error = {}) {
+  const std::string global = OIIO::geterror();
+  if (object_error.empty()) return global.empty() ? "no reason given" : global;
+  return object_error;
+}
+
+// Whether OpenImageIO has a reader registered for the extension of `path`.
+bool known_read_extension(const std::string& path) {
+  const std::string extension = extension_of(path);
+  if (extension.empty()) return false;
+  // "extension_list" is "format:ext,ext;format:ext,...".
+  std::stringstream formats(OIIO::get_string_attribute("extension_list"));
+  std::string format;
+  while (std::getline(formats, format, ';')) {
+    std::stringstream extensions(format.substr(format.find(':') + 1));
+    std::string candidate;
+    while (std::getline(extensions, candidate, ','))
+      if (candidate == extension) return true;
+  }
+  return false;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Reading
+
+std::unique_ptr<OIIO::ImageInput> open_input(const std::string& path) {
+  std::error_code error;
+  const fs::file_status status = fs::status(path, error);
+  if (status.type() == fs::file_type::not_found) fail(path, "file not found");
+  if (error) fail(path, "cannot access (" + error.message() + ")");
+  if (fs::is_directory(status)) fail(path, "is a folder, not an image file");
+
+  // Keep straight (unassociated) alpha as stored: otherwise OpenImageIO multiplies PNG and TIFF
+  // colour by alpha on reading, which would also change colour under zero alpha for good.
+  OIIO::ImageSpec config;
+  config.attribute("oiio:UnassociatedAlpha", 1);
+  auto input = OIIO::ImageInput::open(path, &config);
+  if (!input) {
+    const std::string why = oiio_error();
+    if (!known_read_extension(path))
+      fail(path, "unknown image format (" + why + ")");
+    fail(path, "cannot read (" + why + ")");
+  }
+  const OIIO::ImageSpec& spec = input->spec();
+  if (spec.deep) fail(path, "deep images are not supported");
+  if (spec.depth > 1) fail(path, "volume images are not supported");
+  if (spec.width < 1 || spec.height < 1 || spec.nchannels < 1) fail(path, "has no pixels");
+  return input;
+}
+
+// Channels [begin, end) of the first subimage as interleaved floats. Integer data arrives
+// scaled to [0, 1]. The data window is read whatever its offset: tridiff has no use for
+// OpenEXR's display window.
+std::vector<float> read_interleaved(OIIO::ImageInput& input, const std::string& path, int begin,
+                                    int end) {
+  const OIIO::ImageSpec& spec = input.spec();
+  std::vector<float> pixels(static_cast<std::size_t>(spec.width) *
+                            static_cast<std::size_t>(spec.height) *
+                            static_cast<std::size_t>(end - begin));
+  if (!input.read_image(0, 0, begin, end, OIIO::TypeDesc::FLOAT, pixels.data()))
+    fail(path, "cannot read the pixels (" + oiio_error(input.geterror()) + ")");
+  return pixels;
+}
+
+// dst(x, y) = pixels[(y * width + x) * stride + offset].
+void deinterleave(const std::vector<float>& pixels, int stride, int offset, Plane dst) {
+  const float* source = pixels.data() + offset;
+  for (std::ptrdiff_t y = 0; y < dst.height(); ++y) {
+    float* row = dst.row(y);
+    for (std::ptrdiff_t x = 0; x < dst.width(); ++x, source += stride) row[x] = *source;
+  }
+}
+
+int find_channel(const OIIO::ImageSpec& spec, const std::string& name) {
+  const auto& names = spec.channelnames;
+  const auto found = std::find(names.begin(), names.end(), name);
+  return found == names.end() ? -1 : static_cast<int>(found - names.begin());
+}
+
+// Which file channels become R, G, B (and A, -1 when there is none).
+struct ColorChannels {
+  int rgb[3];
+  int alpha;
+};
+
+ColorChannels choose_color_channels(const OIIO::ImageSpec& spec) {
+  const int n = spec.nchannels;
+  const int r = find_channel(spec, "R"), g = find_channel(spec, "G"), b = find_channel(spec, "B");
+  int alpha = spec.alpha_channel >= 0 && spec.alpha_channel < n ? spec.alpha_channel
+                                                                  : find_channel(spec, "A");
+  if (r >= 0 && g >= 0 && b >= 0) return {{r, g, b}, alpha};
+  if (n >= 3) {
+    // Unnamed (or oddly named) channels: the first three are colour, a fourth is alpha.
+    if (alpha < 3 && n >= 4) alpha = 3;
+    return {{0, 1, 2}, alpha >= 3 ? alpha : -1};
+  }
+  // One channel is grey; two are grey and alpha, in whichever order the file says.
+  if (n == 1) return {{0, 0, 0}, -1};
+  const int grey = alpha == 0 ? 1 : 0;
+  return {{grey, grey, grey}, 1 - grey};
+}
+
+bool names_linear_space(std::string space) {
+  space = lowercase(space);
+  return space == "raw" || space.starts_with("lin") || space.find("linear") != std::string::npos;
+}
+
+// Auto: floating-point data is linear light; integer data is sRGB unless the file says linear
+// (a PNG with gAMA 1.0, anything tagged "Linear" / "scene_linear" / "lin_rec709" ...).
+ColorEncoding detect_encoding(const OIIO::ImageSpec& spec, int channel) {
+  if (spec.channelformat(channel).is_floating_point()) return ColorEncoding::Linear;
+  return names_linear_space(spec.get_string_attribute("oiio:ColorSpace")) ? ColorEncoding::Linear
+                                                                          : ColorEncoding::Srgb;
+}
+
+// The depth channel: the one asked for, else "Z", else "depth" (any case), else the first.
+int choose_depth_channel(const std::string& path, const OIIO::ImageSpec& spec,
+                         const std::string& wanted) {
+  if (!wanted.empty()) {
+    const int channel = find_channel(spec, wanted);
+    if (channel < 0)
+      fail(path, "channel " + quote(wanted) + " not found (channels: " + join(spec.channelnames) +
+                     ")");
+    return channel;
+  }
+  if (const int z = find_channel(spec, "Z"); z >= 0) return z;
+  for (int c = 0; c < spec.nchannels; ++c)
+    if (lowercase(spec.channelnames[c]) == "depth") return c;
+  return 0;
+}
+
+std::string format_value(float value) {
+  std::ostringstream text;
+  text.precision(std::numeric_limits<float>::max_digits10);
+  text << value;
+  return text.str();
+}
+
+void check_depth_options(const DepthOptions& options) {
+  if (options.convention != DepthConvention::Normalized) return;
+  const float near = options.near_plane, far = options.far_plane;
+  if (!(std::isfinite(near) && near >= 0.f))
+    throw InvalidArgument("near_plane", -1, -1,
+                          "must be finite and >= 0 for normalized depth, got " +
+                              format_value(near));
+  if (!(std::isfinite(far) && far > near))
+    throw InvalidArgument("far_plane", -1, -1,
+                          "must be finite and greater than near_plane (" + format_value(near) +
+                              ") for normalized depth, got " + format_value(far));
+}
+
+float to_distance(float value, const DepthOptions& options) {
+  switch (options.convention) {
+    case DepthConvention::Normalized:
+      return options.near_plane + value * (options.far_plane - options.near_plane);
+    case DepthConvention::Inverse:
+      return 1.f / value;
+    case DepthConvention::Linear:
+      break;
+  }
+  return value;
+}
+
+// "NaN", "infinite", "negative (-2)" or "zero": why a distance is unusable.
+std::string describe_bad(float value) {
+  if (std::isnan(value)) return "NaN";
+  if (std::isinf(value)) return value > 0 ? "infinite" : "infinite (negative)";
+  if (value < 0) return "negative (" + format_value(value) + ")";
+  return "zero";
+}
+
+const char* convention_name(DepthConvention convention) {
+  switch (convention) {
+    case DepthConvention::Normalized: return "normalized";
+    case DepthConvention::Inverse: return "inverse";
+    case DepthConvention::Linear: break;
+  }
+  return "linear";
+}
+
+[[noreturn]] void fail_depth(const std::string& path, const std::string& channel, std::ptrdiff_t x,
+                             std::ptrdiff_t y, float value, float distance,
+                             DepthConvention convention) {
+  std::string message = "pixel (" + std::to_string(x) + ", " + std::to_string(y) +
+                        ") of channel " + quote(channel) + " is ";
+  // Name the stored value when it is itself the problem, else what the conversion made of it.
+  if (convention == DepthConvention::Linear || std::isnan(value) || std::isinf(value))
+    message += describe_bad(value);
+  else
+    message += format_value(value) + ", a distance that is " + describe_bad(distance) +
+               " under the " + convention_name(convention) + " convention";
+  fail(path, message + "; depth must be finite and > 0");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Writing
+
+// How an output file stores its numbers.
+struct OutputFormat {
+  OIIO::TypeDesc type;
+  bool srgb;  // whether colour planes are sRGB-encoded (integer formats) or linear
+};
+
+constexpr float kHalfMax = 65504.f;
+
+bool exceeds_half(const Image& image) {
+  for (int c = 0; c < image.channels(); ++c) {
+    const ConstPlane plane = image.plane(c);
+    for (std::ptrdiff_t y = 0; y < plane.height(); ++y)
+      for (std::ptrdiff_t x = 0; x < plane.width(); ++x)
+        if (std::isfinite(plane(x, y)) && std::abs(plane(x, y)) > kHalfMax) return true;
+  }
+  return false;
+}
+
+// PNG and JPEG 8-bit, TIFF 16-bit (enough for smooth gradients after blurring), OpenEXR half
+// unless a value would overflow it, other float formats float, anything else 8-bit.
+OutputFormat choose_output_format(const std::string& extension, const Image& image,
+                                  ColorEncoding encoding) {
+  if (extension == "exr" || extension == "sxr" || extension == "mxr")
+    return {exceeds_half(image) ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::HALF, false};
+  if (extension == "hdr" || extension == "rgbe" || extension == "pfm")
+    return {OIIO::TypeDesc::FLOAT, false};
+  const bool srgb = encoding != ColorEncoding::Linear;
+  if (extension == "tif" || extension == "tiff") return {OIIO::TypeDesc::UINT16, srgb};
+  return {OIIO::TypeDesc::UINT8, srgb};
+}
+
+// Refuses, before any file is touched, what would fail late or not at all in the writer.
+void check_output(const std::string& path, const std::string& extension, const Image& image) {
+  if (image.empty()) throw InvalidArgument("image", -1, -1, "is empty");
+  if (extension.empty())
+    fail(path, "has no extension to choose the image format from (.png, .jpg, .tif, .exr ...)");
+  // OpenImageIO picks the writer from the extension alone, without touching the disk.
+  if (!OIIO::ImageOutput::create(path)) {
+    oiio_error();  // clear it: our message says the same
+    fail(path, "unknown image format '." + extension + "' (OpenImageIO has no writer for it)");
+  }
+  std::error_code error;
+  if (fs::is_directory(path, error)) fail(path, "is a folder");
+  const fs::path folder = fs::path(path).parent_path();
+  if (!folder.empty() && !fs::is_directory(folder, error))
+    fail(path, "folder " + quote(folder.string()) + " does not exist");
+  if (extension == "jpg" || extension == "jpeg" || extension == "jpe" || extension == "jfif") {
+    // libjpeg ends the whole process on an oversized image instead of returning an error.
+    if (image.width() > 65500 || image.height() > 65500)
+      fail(path, "JPEG images are at most 65500 pixels wide and high");
+    // The JPEG writer would silently make three channels of two, or drop all past three.
+    if (image.channels() != 1 && image.channels() != 3 && image.channels() != 4)
+      fail(path, "JPEG holds 1 or 3 channels (4: alpha is dropped), not " +
+                     std::to_string(image.channels()));
+  }
+}
+
+OIIO::ImageSpec output_spec(const Image& image, const OutputFormat& format) {
+  const int channels = image.channels();
+  OIIO::ImageSpec spec(static_cast<int>(image.width()), static_cast<int>(image.height()),
+                       channels, format.type);
+  // read_color's conventions in reverse: one channel is grey, two are grey and alpha, the
+  // fourth is alpha. (A fresh vector: assigning a literal to channelnames[i] trips GCC 12's
+  // false -Wrestrict warning.)
+  if (channels <= 2)
+    spec.channelnames = channels == 1 ? std::vector<std::string>{"Y"}
+                                      : std::vector<std::string>{"Y", "A"};
+  spec.alpha_channel = channels == 2 ? 1 : channels >= 4 ? 3 : -1;
+  spec.attribute("oiio:ColorSpace", format.srgb ? "sRGB" : "Linear");
+  // Our alpha is straight: tell the writer not to divide colour by it.
+  if (spec.alpha_channel >= 0) spec.attribute("oiio:UnassociatedAlpha", 1);
+  return spec;
+}
+
+int color_plane_count(int channels) { return channels == 2 ? 1 : std::min(3, channels); }
+
+// The planes interleaved as T, each value passed through store(value, is_colour_plane).
+template <class T, class Store>
+std::vector<T> interleave(const Image& image, Store store) {
+  const std::ptrdiff_t width = image.width(), height = image.height();
+  const int channels = image.channels(), colour = color_plane_count(channels);
+  std::vector<T> pixels(static_cast<std::size_t>(width * height * channels));
+#pragma omp parallel for schedule(static)
+  for (std::ptrdiff_t y = 0; y < height; ++y) {
+    for (int c = 0; c < channels; ++c) {
+      const float* row = image.plane(c).row(y);
+      T* out = pixels.data() + y * width * channels + c;
+      for (std::ptrdiff_t x = 0; x < width; ++x) out[x * channels] = store(row[x], c < colour);
+    }
+  }
+  return pixels;
+}
+
+// sRGB-encodes (when asked) and rounds to T's full range; NaN and negatives become 0.
+template <class T>
+std::vector<T> quantise(const Image& image, bool srgb) {
+  constexpr float kMax = static_cast<float>(std::numeric_limits<T>::max());
+  return interleave<T>(image, [srgb](float value, bool colour) {
+    if (srgb && colour) value = linear_to_srgb(value);
+    if (!(value > 0.f)) return T(0);
+    return static_cast<T>(std::min(value, 1.f) * kMax + 0.5f);
+  });
+}
+
+// A name next to `target` that no other writer (thread or process) uses: "name.tmp-<pid>-<n>.png".
+// The extension stays last because OpenImageIO picks the format from it.
+fs::path temporary_path(const fs::path& target) {
+  static std::atomic<unsigned long> counter{0};
+  const std::string name = target.stem().string() + ".tmp-" + std::to_string(::getpid()) + "-" +
+                           std::to_string(counter++) + target.extension().string();
+  return target.parent_path() / name;
+}
+
+// Removes the temporary file unless it was renamed into place.
+class TemporaryFile {
+ public:
+  explicit TemporaryFile(fs::path path) : path_(std::move(path)) {}
+  TemporaryFile(const TemporaryFile&) = delete;
+  TemporaryFile& operator=(const TemporaryFile&) = delete;
+  ~TemporaryFile() {
+    std::error_code ignored;
+    if (!kept_) fs::remove(path_, ignored);
+  }
+  const fs::path& path() const { return path_; }
+  void keep() { kept_ = true; }
+
+ private:
+  fs::path path_;
+  bool kept_ = false;
+};
+
+void write_file(const std::string& path, const std::string& file, const OIIO::ImageSpec& spec,
+                OIIO::TypeDesc type, const void* pixels) {
+  auto output = OIIO::ImageOutput::create(file);
+  if (!output) fail(path, "unknown image format (" + oiio_error() + ")");
+  if (!output->open(file, spec))
+    fail(path, "cannot write (" + oiio_error(output->geterror()) + ")");
+  bool written = output->write_image(type, pixels);
+  written = output->close() && written;
+  if (!written) fail(path, "cannot write (" + oiio_error(output->geterror()) + ")");
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+
+ColorImage read_color(const std::string& path, ColorEncoding encoding) {
+  const auto input = open_input(path);
+  const OIIO::ImageSpec& spec = input->spec();
+  const ColorChannels chosen = choose_color_channels(spec);
+
+  // Read only the span of channels we use (an EXR may carry many more).
+  int first = std::min({chosen.rgb[0], chosen.rgb[1], chosen.rgb[2]});
+  int last = std::max({chosen.rgb[0], chosen.rgb[1], chosen.rgb[2]});
+  if (chosen.alpha >= 0) first = std::min(first, chosen.alpha), last = std::max(last, chosen.alpha);
+  const std::vector<float> pixels = read_interleaved(*input, path, first, last + 1);
+
+  const int stride = last + 1 - first;
+  Image image(spec.width, spec.height, chosen.alpha >= 0 ? 4 : 3);
+  for (int c = 0; c < 3; ++c) deinterleave(pixels, stride, chosen.rgb[c] - first, image.plane(c));
+  if (chosen.alpha >= 0) deinterleave(pixels, stride, chosen.alpha - first, image.plane(3));
+
+  const ColorEncoding held =
+      encoding == ColorEncoding::Auto ? detect_encoding(spec, chosen.rgb[0]) : encoding;
+  if (held == ColorEncoding::Srgb) srgb_to_linear(image);
+  return {std::move(image), held};
+}
+
+Image read_depth(const std::string& path, const DepthOptions& options) {
+  check_depth_options(options);
+  const auto input = open_input(path);
+  const OIIO::ImageSpec& spec = input->spec();
+  const int channel = choose_depth_channel(path, spec, options.channel);
+  const std::vector<float> values = read_interleaved(*input, path, channel, channel + 1);
+
+  Image depth(spec.width, spec.height, 1);
+  const Plane plane = depth.plane(0);
+  const float* value = values.data();
+  for (std::ptrdiff_t y = 0; y < plane.height(); ++y)
+    for (std::ptrdiff_t x = 0; x < plane.width(); ++x, ++value) {
+      const float distance = to_distance(*value, options);
+      if (!(std::isfinite(distance) && distance > 0.f))
+        fail_depth(path, spec.channelnames[channel], x, y, *value, distance, options.convention);
+      plane(x, y) = distance;
+    }
+  return depth;
+}
+
+void write_image(const std::string& path, const Image& image, ColorEncoding encoding) {
+  const std::string extension = extension_of(path);
+  check_output(path, extension, image);
+  const OutputFormat format = choose_output_format(extension, image, encoding);
+  const OIIO::ImageSpec spec = output_spec(image, format);
+
+  TemporaryFile temporary(temporary_path(path));
+  if (format.type == OIIO::TypeDesc::UINT8) {
+    write_file(path, temporary.path().string(), spec, format.type,
+               quantise<std::uint8_t>(image, format.srgb).data());
+  } else if (format.type == OIIO::TypeDesc::UINT16) {
+    write_file(path, temporary.path().string(), spec, format.type,
+               quantise<std::uint16_t>(image, format.srgb).data());
+  } else {
+    // Float formats take linear values as they are; the writer rounds to half when asked.
+    const auto pixels = interleave<float>(image, [](float value, bool) { return value; });
+    write_file(path, temporary.path().string(), spec, OIIO::TypeDesc::FLOAT, pixels.data());
+  }
+
+  std::error_code error;
+  fs::rename(temporary.path(), path, error);
+  if (error) fail(path, "cannot replace the file (" + error.message() + ")");
+  temporary.keep();
+}
+
+std::vector<std::string> channel_names(const std::string& path) {
+  return open_input(path)->spec().channelnames;
+}
+
+}  // namespace tridiff

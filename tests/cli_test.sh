@@ -1,0 +1,242 @@
+#!/usr/bin/env bash
+# Tests of the `tridiff` command line, run by CTest:
+#   cli_test.sh TRIDIFF_BINARY WORK_DIR CASE
+# CASE is one of: help, dof, roundtrip, errors. Every check prints what it ran and what it saw
+# when it fails; the script exits non-zero if any check failed.
+set -u
+
+tridiff=$1
+work=$2
+case_name=$3
+
+failures=0
+fail() {
+  echo "FAIL: $*" >&2
+  failures=$((failures + 1))
+}
+
+# run ARGS...: runs tridiff, leaving its exit status in $status and its output in $out/$err.
+run() {
+  out=$("$tridiff" "$@" 2>"$work/stderr.txt")
+  status=$?
+  err=$(cat "$work/stderr.txt")
+  rm -f "$work/stderr.txt"
+}
+
+expect_status() {  # expect_status WANT DESCRIPTION  (WANT: 0 or "nonzero")
+  if [[ $1 == 0 && $status -ne 0 ]]; then
+    fail "$2: exit $status, expected 0; stderr: $err"
+  elif [[ $1 == nonzero && $status -eq 0 ]]; then
+    fail "$2: exit 0, expected a failure; stdout: $out"
+  fi
+}
+
+expect_in() {  # expect_in TEXT NEEDLE DESCRIPTION
+  if [[ $1 != *"$2"* ]]; then fail "$3: '$2' not found in: $1"; fi
+}
+
+expect_file() {  # a non-empty file
+  if [[ ! -s $1 ]]; then fail "$2: $1 missing or empty"; fi
+}
+
+expect_size() {  # expect_size FILE "W x H"
+  if command -v oiiotool >/dev/null; then
+    local info
+    info=$(oiiotool --info "$1" 2>&1)
+    # oiiotool pads the numbers: "160 x  90".
+    if [[ $(echo "$info" | tr -s ' ') != *"$2"* ]]; then
+      fail "$1: expected $2, oiiotool says: $info"
+    fi
+  fi
+}
+
+# The folder holds exactly the files named (nothing partial, no temporary files).
+expect_only_files() {  # expect_only_files DIR FILE...
+  local dir=$1
+  shift
+  local have want
+  have=$(cd "$dir" && ls -A | sort | tr '\n' ' ')
+  want=$(printf '%s\n' "$@" | sed '/^$/d' | sort | tr '\n' ' ')
+  if [[ $have != "$want" ]]; then fail "$dir holds [$have], expected [$want]"; fi
+}
+
+need_oiiotool() {
+  if ! command -v oiiotool >/dev/null; then
+    echo "oiiotool not found: cannot make depth files" >&2
+    exit 1
+  fi
+}
+
+rm -rf "$work"
+mkdir -p "$work"
+
+case $case_name in
+help)
+  run --help
+  expect_status 0 "tridiff --help"
+  expect_in "$out" "--focus" "tridiff --help"
+  expect_in "$out" "--method" "tridiff --help"
+  run dof --help
+  expect_status 0 "tridiff dof --help"
+  expect_in "$out" "--focus" "tridiff dof --help"
+  run methods
+  expect_status 0 "tridiff methods"
+  expect_in "$out" "adi" "tridiff methods"
+  expect_in "$out" "mpad" "tridiff methods"
+  run bogus
+  expect_status nonzero "tridiff bogus"
+  expect_in "$err" "bogus" "tridiff bogus"
+  ;;
+
+dof)
+  d=$work/out
+  mkdir -p "$d"
+  run dof --width 160 --height 90 -o "$d/out.png" --report "$d/r.json"
+  expect_status 0 "dof on the built-in scene"
+  expect_file "$d/out.png" "dof"
+  expect_file "$d/out_coc.png" "dof"
+  expect_size "$d/out.png" "160 x 90"
+  expect_size "$d/out_coc.png" "160 x 90"
+  expect_file "$d/r.json" "dof --report"
+  json=$(cat "$d/r.json" 2>/dev/null)
+  expect_in "$json" '"skipped_fraction"' "report"
+  expect_in "$json" '"method": "adi"' "report"
+  expect_in "$out" "skipped" "stdout summary"
+  if command -v python3 >/dev/null; then
+    python3 -c 'import json, sys
+r = json.load(open(sys.argv[1]))
+assert 0 <= r["skipped_fraction"] <= 1' "$d/r.json" ||
+      fail "r.json is not valid JSON with skipped_fraction in [0, 1]"
+  fi
+  expect_only_files "$d" out.png out_coc.png r.json
+
+  run dof --width 160 --height 90 --method mpad --max-coc 8 -o "$d/mpad.png" --report "$d/mpad.json"
+  expect_status 0 "dof --method mpad --max-coc 8"
+  expect_file "$d/mpad.png" "mpad"
+  expect_file "$d/mpad_coc.png" "mpad"
+  json=$(cat "$d/mpad.json" 2>/dev/null)
+  expect_in "$json" '"method": "mpad"' "mpad report"
+  # |CoC| <= 8 -> beta <= 64/32 = 2 -> at most 8 explicit steps of 0.25 (at 160 px wide the
+  # scene's largest |CoC| is about 5.4 px: 4 steps).
+  steps=$(echo "$json" | sed -n 's/.*"explicit_steps": \([0-9]*\).*/\1/p')
+  if [[ -z $steps || $steps -lt 1 || $steps -gt 8 ]]; then
+    fail "mpad --max-coc 8: explicit_steps '$steps' not in [1, 8]"
+  fi
+  run dof --width 160 --height 90 --method mpad --max-coc 8 --f-number 0.5 -o "$d/mpad8.png" \
+    --report "$d/mpad8.json"
+  expect_status 0 "dof --method mpad --max-coc 8 --f-number 0.5"
+  # f/0.5 puts the twig at ~19 px, clamped to 8: exactly 8 steps.
+  expect_in "$(cat "$d/mpad8.json" 2>/dev/null)" '"explicit_steps": 8' "mpad report at the clamp"
+
+  run dof --width 160 --height 90 --layers -o "$d/layers.png" --report "$d/layers.json"
+  expect_status 0 "dof --layers"
+  expect_file "$d/layers.png" "layers"
+  # The scene has a twig in the near field: layering happens.
+  expect_in "$(cat "$d/layers.json" 2>/dev/null)" '"layered": true' "layers report"
+
+  run dof --width 160 --height 90 -o "$d/out.exr" --coc-output "$d/coc.exr"
+  expect_status 0 "dof with EXR output"
+  expect_file "$d/out.exr" "EXR output"
+  expect_file "$d/coc.exr" "EXR CoC output"
+  if command -v oiiotool >/dev/null; then
+    info=$(oiiotool --info "$d/out.exr" 2>&1)
+    expect_in "$info" "openexr" "out.exr format"
+  fi
+  ;;
+
+roundtrip)
+  need_oiiotool
+  d=$work
+  run dof --width 160 --height 90 --input-output "$d/in.exr" -o "$d/o1.png"
+  expect_status 0 "dof writing the input"
+  expect_file "$d/in.exr" "--input-output"
+  expect_size "$d/in.exr" "160 x 90"
+  oiiotool --pattern constant:color=2.0 160x90 1 -d float -o "$d/depth.exr" || fail "oiiotool depth"
+  run dof --color "$d/in.exr" --depth "$d/depth.exr" -o "$d/o2.png" --focus 2 --report "$d/r2.json"
+  expect_status 0 "dof from files"
+  expect_file "$d/o2.png" "dof from files"
+  expect_file "$d/o2_coc.png" "dof from files"
+  expect_size "$d/o2.png" "160 x 90"
+  # All at the focus distance: nothing to blur, every pixel skipped.
+  expect_in "$(cat "$d/r2.json" 2>/dev/null)" '"skipped_fraction": 1' "in-focus depth"
+  run dof --color "$d/in.exr" --depth "$d/depth.exr" -o "$d/o3.png" --focus 1 --method mpad --layers
+  expect_status 0 "dof from files, mpad with layers"
+  expect_file "$d/o3.png" "dof from files, mpad"
+  ;;
+
+errors)
+  need_oiiotool
+  d=$work/e
+  mkdir -p "$d"
+  make=(oiiotool --pattern)
+  "${make[@]}" constant:color=2.0 160x90 1 -d float -o "$work/depth.exr" || fail "oiiotool"
+  "${make[@]}" constant:color=2.0 80x45 1 -d float -o "$work/small_depth.exr" || fail "oiiotool"
+  oiiotool --pattern constant:color=2.0 160x90 1 --fill:color=-1 1x1+5+7 -d float \
+    -o "$work/negative_depth.exr" || fail "oiiotool"
+  "${make[@]}" constant:color=0.3,0.5,0.7 160x90 3 -d half -o "$work/color.exr" || fail "oiiotool"
+
+  run dof --color "$d/missing.exr" --depth "$work/depth.exr" -o "$d/x.png"
+  expect_status nonzero "missing --color file"
+  expect_in "$err" "missing.exr" "missing --color file"
+  expect_only_files "$d"  # no x.png, no x_coc.png, no temporary file
+
+  run dof --color "$work/color.exr" --depth "$d/nodepth.exr" -o "$d/x.png"
+  expect_status nonzero "missing --depth file"
+  expect_in "$err" "nodepth.exr" "missing --depth file"
+  expect_only_files "$d"
+
+  run dof --width 32 --height 18 --method nope -o "$d/x.png"
+  expect_status nonzero "--method nope"
+  expect_in "$err" "nope" "--method nope"
+  expect_in "$err" "adi" "--method nope"
+  expect_in "$err" "mpad" "--method nope"
+  expect_only_files "$d"
+
+  run dof --width 32 --height 18 --focus abc -o "$d/x.png"
+  expect_status nonzero "--focus abc"
+  expect_in "$err" "--focus" "--focus abc"
+  expect_in "$err" "abc" "--focus abc"
+  expect_only_files "$d"
+
+  run dof --width 32 --height 18 --focus 0.01 -o "$d/x.png"
+  expect_status nonzero "--focus inside the focal length"
+  expect_in "$err" "focus" "--focus 0.01"
+  expect_only_files "$d"
+
+  run dof --color "$work/color.exr" --depth "$work/small_depth.exr" -o "$d/x.png"
+  expect_status nonzero "colour and depth of different sizes"
+  expect_in "$err" "160 x 90" "different sizes"
+  expect_in "$err" "80 x 45" "different sizes"
+  expect_only_files "$d"
+
+  run dof --color "$work/color.exr" --depth "$work/negative_depth.exr" -o "$d/x.png"
+  expect_status nonzero "negative depth"
+  expect_in "$err" "negative_depth.exr" "negative depth"
+  expect_in "$err" "5, 7" "negative depth (pixel 5, 7)"
+  expect_only_files "$d"
+
+  run dof --width 32 --height 18 --bogus 1 -o "$d/x.png"
+  expect_status nonzero "unknown option"
+  expect_in "$err" "--bogus" "unknown option"
+
+  run dof --width 32 --height 18 --threads
+  expect_status nonzero "option without its value"
+  expect_in "$err" "--threads" "option without its value"
+
+  # The sanity check of this case: the same inputs, fixed, do work.
+  run dof --color "$work/color.exr" --depth "$work/depth.exr" -o "$d/ok.png"
+  expect_status 0 "valid files"
+  expect_file "$d/ok.png" "valid files"
+  ;;
+
+*)
+  echo "unknown case '$case_name'" >&2
+  exit 2
+  ;;
+esac
+
+if ((failures)); then
+  echo "$case_name: $failures check(s) failed" >&2
+  exit 1
+fi
+echo "$case_name: all checks passed"
