@@ -23,9 +23,12 @@
 #include "tridiff/diffusion/adi.hpp"
 #include "tridiff/diffusion/explicit.hpp"
 #include "tridiff/diffusion/links.hpp"
+#include "test_util.hpp"
 
 namespace tridiff::test {
 namespace {
+
+using namespace tridiff::testing_util;
 
 constexpr double kEps = std::numeric_limits<float>::epsilon();  // 2^-23
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
@@ -42,29 +45,6 @@ constexpr Size kSizes[] = {{1, 1},   {1, 37},   {37, 1},   {2, 3},    {7, 5},
 
 std::string name(Size size) {
   return std::to_string(size.width) + " x " + std::to_string(size.height);
-}
-
-// Passes when `text` contains `part`, printing the whole text otherwise.
-::testing::AssertionResult contains(const std::string& text, const std::string& part) {
-  if (text.find(part) != std::string::npos) return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << "'" << text << "' does not contain '" << part << "'";
-}
-
-// The InvalidArgument that `action` throws (a test failure, and an empty one, if none).
-struct Thrown {
-  std::string argument, message;
-};
-Thrown invalid_argument_of(const std::function<void()>& action) {
-  try {
-    action();
-  } catch (const InvalidArgument& error) {
-    return {error.argument(), error.what()};
-  } catch (const std::exception& error) {
-    ADD_FAILURE() << "threw something other than InvalidArgument: " << error.what();
-    return {};
-  }
-  ADD_FAILURE() << "no InvalidArgument thrown";
-  return {};
 }
 
 std::string pixel(std::ptrdiff_t x, std::ptrdiff_t y) {

@@ -20,20 +20,17 @@
 
 #include "tridiff/image/color.hpp"
 #include "tridiff/image/io.hpp"
+#include "test_util.hpp"
 
 namespace tridiff::test {
 namespace {
+
+using namespace tridiff::testing_util;
 
 namespace fs = std::filesystem;
 
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 constexpr float kInf = std::numeric_limits<float>::infinity();
-
-// Passes when `text` contains `part`, printing the whole text otherwise.
-::testing::AssertionResult contains(const std::string& text, const std::string& part) {
-  if (text.find(part) != std::string::npos) return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << "'" << text << "' does not contain '" << part << "'";
-}
 
 // The message of the E that `action` throws (a test failure if it throws nothing).
 template <class E = ImageIoError>
@@ -45,16 +42,6 @@ std::string message_of(const std::function<void()>& action) {
   }
   ADD_FAILURE() << "no exception thrown";
   return {};
-}
-
-// An image whose value at (x, y, c) is value(x, y, c).
-Image make_image(std::ptrdiff_t width, std::ptrdiff_t height, int channels,
-                 const std::function<float(std::ptrdiff_t, std::ptrdiff_t, int)>& value) {
-  Image image(width, height, channels);
-  for (int c = 0; c < channels; ++c)
-    for (std::ptrdiff_t y = 0; y < height; ++y)
-      for (std::ptrdiff_t x = 0; x < width; ++x) image(x, y, c) = value(x, y, c);
-  return image;
 }
 
 // Uniform random values in [low, high), the same for every run.

@@ -29,6 +29,7 @@ void coc_map(Plane coc, ConstPlane depth, int threads, Model model) {
   for (std::ptrdiff_t y = 0; y < depth.height(); ++y) {
     const float* d = depth.row(y);
     float* c = coc.row(y);
+#pragma omp simd
     for (std::ptrdiff_t x = 0; x < depth.width(); ++x) c[x] = model(d[x]);
   }
 }
@@ -107,17 +108,7 @@ float coc_artist_curve(float distance_m, const ArtistCurve& curve) {
 
 void coc_thin_lens(Plane coc, ConstPlane depth, const ThinLens& lens, int threads) {
   validate(lens);
-  const ThinLensFold model(lens, depth.width());
-  if (coc.width() != depth.width() || coc.height() != depth.height())
-    throw InvalidArgument("coc", -1, -1, "size differs from the depth map");
-  const int team = detail::resolve_threads(threads);
-#pragma omp parallel for num_threads(team) schedule(static)
-  for (std::ptrdiff_t y = 0; y < depth.height(); ++y) {
-    const float* d = depth.row(y);
-    float* c = coc.row(y);
-#pragma omp simd
-    for (std::ptrdiff_t x = 0; x < depth.width(); ++x) c[x] = model(d[x]);
-  }
+  coc_map(coc, depth, threads, ThinLensFold(lens, depth.width()));
 }
 
 void coc_artist_curve(Plane coc, ConstPlane depth, const ArtistCurve& curve, int threads) {

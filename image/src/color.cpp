@@ -4,28 +4,17 @@
 
 #include <algorithm>
 
-#ifdef _OPENMP
-#include <omp.h>
-#endif
+#include "tridiff/solvers/solve.hpp"  // detail::resolve_threads: one meaning of `threads`
 
 namespace tridiff {
 namespace {
-
-int resolve_threads(int threads) {
-  if (threads < 0) throw InvalidArgument("threads", -1, -1, "must be >= 0 (0: all cores)");
-#ifdef _OPENMP
-  return threads == 0 ? omp_get_max_threads() : threads;
-#else
-  return 1;
-#endif
-}
 
 // Applies `curve` to every pixel of the first min(3, channels) planes; the fourth plane is alpha
 // (a coverage fraction, not light) and the padding stays zero because only `width` columns are
 // touched.
 template <class Curve>
 void apply_to_colour_planes(Image& image, int threads, Curve curve) {
-  const int team = resolve_threads(threads);
+  const int team = detail::resolve_threads(threads);
   if (image.empty()) return;
   const std::ptrdiff_t width = image.width(), height = image.height(), pitch = image.pitch();
   const std::ptrdiff_t rows = std::min(3, image.channels()) * height;
