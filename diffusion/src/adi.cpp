@@ -6,6 +6,7 @@
 #include <exception>
 #include <limits>
 #include <mutex>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -111,92 +112,90 @@ SolveOptions one_thread_thomas() {
   return options;
 }
 
+enum class Direction { Rows, Columns };
+
+// One pass (rows or columns) over several planes that share the links: band by band (a band is
+// one tile row of image rows, or one tile column of image columns), and inside a band plane by
+// plane, so that the band's links and segments are found once and stay in cache for every
+// plane. dst[c] may be src[c].
+DiffusionReport run_pass(Direction direction, std::span<const Plane> dst,
+                         std::span<const ConstPlane> src, const LinkField& beta,
+                         const DiffusionOptions& options) {
+  const bool rows = direction == Direction::Rows;
+  const ConstPlane links = rows ? beta.horizontal() : beta.vertical();
+  for (std::size_t c = 0; c < src.size(); ++c) {
+    require_same_size(src[c], dst[c], "dst");
+    require_same_size(src[c], links, "beta");
+  }
+  const std::ptrdiff_t width = links.width(), height = links.height(), pitch = links.pitch();
+  const std::ptrdiff_t bands = rows ? beta.tiles_y() : beta.tiles_x();
+  const std::ptrdiff_t tiles_along = rows ? beta.tiles_x() : beta.tiles_y();
+  const std::ptrdiff_t length = rows ? width : height;  // of one system
+  const SolveOptions solve_options = one_thread_thomas();
+  std::vector<std::ptrdiff_t> solved(bands, 0);
+
+  for_each_band(bands, detail::resolve_threads(options.threads),
+                [&](std::ptrdiff_t band, std::vector<Segment>& segments) {
+    const std::ptrdiff_t first = band * kTile;  // first row (rows) or column (columns)
+    const std::ptrdiff_t count = std::min(kTile, (rows ? height : width) - first);
+    find_segments(tiles_along, length, options.skip_inactive, [&](std::ptrdiff_t t) {
+      return rows ? beta.horizontal_active(t, band) : beta.vertical_active(band, t);
+    }, segments);
+    // (along, across) -> (x, y): rows run along x, columns along y.
+    auto pixel_x = [&](std::ptrdiff_t along, std::ptrdiff_t across) { return rows ? along : across; };
+    auto pixel_y = [&](std::ptrdiff_t along, std::ptrdiff_t across) { return rows ? across : along; };
+    for (std::size_t c = 0; c < src.size(); ++c) {
+      const Plane out = dst[c];
+      const ConstPlane in = src[c];
+      // Copies pixels [from, to) along every system of the band (the parts not solved).
+      auto copy_span = [&](std::ptrdiff_t from, std::ptrdiff_t to) {
+        if (out.data() == in.data() || to <= from) return;
+        if (rows)
+          for (std::ptrdiff_t y = first; y < first + count; ++y)
+            copy_finite(out.row(y) + from, in.row(y) + from, to - from, from, y);
+        else
+          for (std::ptrdiff_t y = from; y < to; ++y)
+            copy_finite(out.row(y) + first, in.row(y) + first, count, first, y);
+      };
+      std::ptrdiff_t copied_to = 0;
+      for (const Segment& s : segments) {
+        copy_span(copied_to, s.begin);
+        const std::ptrdiff_t n = s.end - s.begin;
+        const std::ptrdiff_t origin = rows ? first * pitch + s.begin : s.begin * pitch + first;
+        const BatchLayout layout =
+            rows ? BatchLayout::rows(n, count, pitch) : BatchLayout::columns(n, count, pitch);
+        try {
+          solve_diffusion(links.data() + origin, in.data() + origin, out.data() + origin, layout,
+                          solve_options);
+        } catch (const InvalidArgument& e) {
+          const std::ptrdiff_t along = s.begin + std::max<std::ptrdiff_t>(e.row(), 0);
+          rethrow_at_pixel(e, pixel_x(along, first + e.system()), pixel_y(along, first + e.system()));
+        } catch (const NumericalError& e) {
+          const std::ptrdiff_t along = s.begin + e.row();
+          rethrow_at_pixel(e, pixel_x(along, first + e.system()), pixel_y(along, first + e.system()));
+        }
+        solved[band] += n * count;
+        copied_to = s.end;
+      }
+      copy_span(copied_to, length);
+    }
+  });
+  const auto planes = std::ptrdiff_t(src.size());
+  DiffusionReport report{width * height * planes, 0};
+  for (std::ptrdiff_t s : solved) report.pixels_solved += s;  // already per plane
+  return report;
+}
+
 }  // namespace
 
 DiffusionReport diffuse_rows(Plane dst, ConstPlane src, const LinkField& beta,
                              const DiffusionOptions& options) {
-  require_same_size(src, dst, "dst");
-  require_same_size(src, beta.horizontal(), "beta");
-  const std::ptrdiff_t width = src.width(), height = src.height();
-  const ConstPlane links = beta.horizontal();
-  const SolveOptions solve_options = one_thread_thomas();
-  const bool copy = dst.data() != src.data();
-  std::vector<std::ptrdiff_t> solved(beta.tiles_y(), 0);
-
-  for_each_band(beta.tiles_y(), detail::resolve_threads(options.threads),
-                [&](std::ptrdiff_t ty, std::vector<Segment>& segments) {
-    const std::ptrdiff_t y0 = ty * kTile, rows = std::min(kTile, height - y0);
-    find_segments(beta.tiles_x(), width, options.skip_inactive,
-                  [&](std::ptrdiff_t tx) { return beta.horizontal_active(tx, ty); }, segments);
-    std::ptrdiff_t copied_to = 0;
-    for (const Segment& s : segments) {
-      if (copy)
-        for (std::ptrdiff_t y = y0; y < y0 + rows; ++y)
-          copy_finite(dst.row(y) + copied_to, src.row(y) + copied_to, s.begin - copied_to,
-                      copied_to, y);
-      const std::ptrdiff_t origin = y0 * src.pitch() + s.begin;
-      try {
-        solve_diffusion(links.data() + origin, src.data() + origin, dst.data() + origin,
-                        BatchLayout::rows(s.end - s.begin, rows, src.pitch()), solve_options);
-      } catch (const InvalidArgument& e) {
-        rethrow_at_pixel(e, s.begin + std::max<std::ptrdiff_t>(e.row(), 0), y0 + e.system());
-      } catch (const NumericalError& e) {
-        rethrow_at_pixel(e, s.begin + e.row(), y0 + e.system());
-      }
-      solved[ty] += (s.end - s.begin) * rows;
-      copied_to = s.end;
-    }
-    if (copy)
-      for (std::ptrdiff_t y = y0; y < y0 + rows; ++y)
-        copy_finite(dst.row(y) + copied_to, src.row(y) + copied_to, width - copied_to,
-                    copied_to, y);
-  });
-  DiffusionReport report{width * height, 0};
-  for (std::ptrdiff_t s : solved) report.pixels_solved += s;
-  return report;
+  return run_pass(Direction::Rows, {&dst, 1}, {&src, 1}, beta, options);
 }
 
 DiffusionReport diffuse_columns(Plane dst, ConstPlane src, const LinkField& beta,
                                 const DiffusionOptions& options) {
-  require_same_size(src, dst, "dst");
-  require_same_size(src, beta.vertical(), "beta");
-  const std::ptrdiff_t width = src.width(), height = src.height();
-  const ConstPlane links = beta.vertical();
-  const SolveOptions solve_options = one_thread_thomas();
-  const bool copy = dst.data() != src.data();
-  std::vector<std::ptrdiff_t> solved(beta.tiles_x(), 0);
-
-  for_each_band(beta.tiles_x(), detail::resolve_threads(options.threads),
-                [&](std::ptrdiff_t tx, std::vector<Segment>& segments) {
-    const std::ptrdiff_t x0 = tx * kTile, columns = std::min(kTile, width - x0);
-    find_segments(beta.tiles_y(), height, options.skip_inactive,
-                  [&](std::ptrdiff_t ty) { return beta.vertical_active(tx, ty); }, segments);
-    std::ptrdiff_t copied_to = 0;
-    auto copy_rows = [&](std::ptrdiff_t from, std::ptrdiff_t to) {
-      if (copy)
-        for (std::ptrdiff_t y = from; y < to; ++y)
-          copy_finite(dst.row(y) + x0, src.row(y) + x0, columns, x0, y);
-    };
-    for (const Segment& s : segments) {
-      copy_rows(copied_to, s.begin);
-      const std::ptrdiff_t origin = s.begin * src.pitch() + x0;
-      try {
-        solve_diffusion(links.data() + origin, src.data() + origin, dst.data() + origin,
-                        BatchLayout::columns(s.end - s.begin, columns, src.pitch()),
-                        solve_options);
-      } catch (const InvalidArgument& e) {
-        rethrow_at_pixel(e, x0 + e.system(), s.begin + std::max<std::ptrdiff_t>(e.row(), 0));
-      } catch (const NumericalError& e) {
-        rethrow_at_pixel(e, x0 + e.system(), s.begin + e.row());
-      }
-      solved[tx] += (s.end - s.begin) * columns;
-      copied_to = s.end;
-    }
-    copy_rows(copied_to, height);
-  });
-  DiffusionReport report{width * height, 0};
-  for (std::ptrdiff_t s : solved) report.pixels_solved += s;
-  return report;
+  return run_pass(Direction::Columns, {&dst, 1}, {&src, 1}, beta, options);
 }
 
 DiffusionReport diffuse_adi(Image& dst, const Image& src, const LinkField& beta,
@@ -204,14 +203,17 @@ DiffusionReport diffuse_adi(Image& dst, const Image& src, const LinkField& beta,
   if (&dst != &src && (dst.width() != src.width() || dst.height() != src.height() ||
                        dst.channels() != src.channels()))
     dst.reset(src.width(), src.height(), src.channels());
-  DiffusionReport report;
-  const int channels = src.channels();
-  for (int c = 0; c < channels; ++c) {
-    report += diffuse_rows(dst.plane(c), src.plane(c), beta, options);
-    if (options.progress) options.progress((2 * c + 1) / (2.0 * channels));
-    report += diffuse_columns(dst.plane(c), dst.plane(c), beta, options);
-    if (options.progress) options.progress((2 * c + 2) / (2.0 * channels));
+  std::vector<Plane> out;
+  std::vector<ConstPlane> in, in_place;
+  for (int c = 0; c < src.channels(); ++c) {
+    out.push_back(dst.plane(c));
+    in.push_back(src.plane(c));
+    in_place.push_back(dst.plane(c));
   }
+  DiffusionReport report = run_pass(Direction::Rows, out, in, beta, options);
+  if (options.progress) options.progress(0.5);
+  report += run_pass(Direction::Columns, out, in_place, beta, options);
+  if (options.progress) options.progress(1.0);
   return report;
 }
 
