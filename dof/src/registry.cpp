@@ -46,13 +46,16 @@ namespace {
 // A fast pass (probe = sum of 0 * v is zero unless some v is NaN or infinite), then, only if
 // it failed, a slow pass that names the first bad pixel.
 void require_finite(ConstPlane plane, const char* what, int channel) {
-  float probe = 0;
+  bool bad = false;
+#pragma omp parallel for schedule(static) reduction(|| : bad)
   for (std::ptrdiff_t y = 0; y < plane.height(); ++y) {
     const float* row = plane.row(y);
+    float probe = 0;
 #pragma omp simd reduction(+ : probe)
     for (std::ptrdiff_t x = 0; x < plane.width(); ++x) probe += 0.f * row[x];
+    bad = bad || probe != 0;
   }
-  if (probe == 0) return;
+  if (!bad) return;
   for (std::ptrdiff_t y = 0; y < plane.height(); ++y)
     for (std::ptrdiff_t x = 0; x < plane.width(); ++x)
       if (!std::isfinite(plane(x, y))) bad_pixel(what, x, y, channel);

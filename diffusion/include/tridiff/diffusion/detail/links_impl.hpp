@@ -2,6 +2,8 @@
 #pragma once
 
 #include <algorithm>
+#include <bit>
+#include <cstdint>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -33,17 +35,17 @@ LinkField links_from_pixels(ConstPlane value, ToLink to_link, int threads) {
   const int team = detail::resolve_threads(threads);
   constexpr std::ptrdiff_t tile = LinkField::kTile;
   const std::ptrdiff_t tiles_x = links.tiles_x();
-  // Per tile: the largest horizontal and vertical link, found while the links are written,
-  // and a probe (sum of 0 * link) that is non-zero only if to_link gave NaN or infinity.
+  // Per tile: the largest horizontal and vertical link, found while the links are written.
   std::vector<float> h_max(tiles_x * links.tiles_y(), 0.f), v_max(h_max.size(), 0.f);
-  std::vector<float> smallest(links.tiles_y(), 0.f), probe(links.tiles_y(), 0.f);
+  std::vector<float> smallest(links.tiles_y(), 0.f), probe(links.tiles_y(), 0.f);  // stay 0:
+  // the conductances are checked instead (bad_value), and valid ones give valid links.
+  constexpr std::int32_t kInfinity = 0x7f800000;
   bool bad_value = false;
 #pragma omp parallel num_threads(team) reduction(|| : bad_value)
   {
     std::vector<float> here(width), below(width);  // per-pixel conductances of rows y, y + 1
 #pragma omp for schedule(static)
     for (std::ptrdiff_t ty = 0; ty < links.tiles_y(); ++ty) {
-      float low = 0, sum = 0;
       for (std::ptrdiff_t y = ty * tile; y < std::min(height, (ty + 1) * tile); ++y) {
         const float* row = y == ty * tile ? value.row(y) : nullptr;
         if (row) {
@@ -66,49 +68,47 @@ LinkField links_from_pixels(ConstPlane value, ToLink to_link, int threads) {
           // one read of `value` and nothing else.
           const std::ptrdiff_t x0 = tx * tile, x1 = std::min(width, x0 + tile);
           const std::ptrdiff_t x1_right = std::min(width, x1 + 1);
-          // Conductances must be finite and >= 0: a tile is skipped only if every one is
-          // exactly zero; a bad one marks the call, which then names the pixel.
-          float any = 0, lowest = 0, probe_here = 0;
-#pragma omp simd reduction(max : any) reduction(min : lowest) reduction(+ : probe_here)
+          // The checks compare bit patterns as integers (integer reductions vectorise; float
+          // min/max reductions do not, in GCC 12): for floats >= +0 the order is the same, a
+          // negative float (or -0) is a negative integer, NaN and infinity are >= kInfinity.
+          std::int32_t highest = 0, lowest = 0;
+#pragma omp simd reduction(max : highest) reduction(min : lowest)
           for (std::ptrdiff_t x = x0; x < x1_right; ++x) {
-            any = std::max(any, here[x]);
-            lowest = std::min(lowest, here[x]);
-            probe_here += 0.f * here[x];
+            const auto b = std::bit_cast<std::int32_t>(here[x]);
+            highest = std::max(highest, b);
+            lowest = std::min(lowest, b);
           }
           if (has_below) {
-#pragma omp simd reduction(max : any) reduction(min : lowest) reduction(+ : probe_here)
+#pragma omp simd reduction(max : highest) reduction(min : lowest)
             for (std::ptrdiff_t x = x0; x < x1; ++x) {
-              any = std::max(any, below[x]);
-              lowest = std::min(lowest, below[x]);
-              probe_here += 0.f * below[x];
+              const auto b = std::bit_cast<std::int32_t>(below[x]);
+              highest = std::max(highest, b);
+              lowest = std::min(lowest, b);
             }
           }
-          if (lowest < 0 || probe_here != 0) bad_value = true;
-          if (any == 0) continue;
-          float hm = h_max[ty * tiles_x + tx], vm = v_max[ty * tiles_x + tx];
+          if (lowest < 0 || highest >= kInfinity) bad_value = true;
+          if (highest == 0) continue;
+          // Valid conductances give valid links (each the smaller of two).
+          std::int32_t hm = 0, vm = 0;
           const std::ptrdiff_t h_end = std::min(x1, width - 1);  // the last column has no link
-#pragma omp simd reduction(max : hm) reduction(min : low) reduction(+ : sum)
+#pragma omp simd reduction(max : hm)
           for (std::ptrdiff_t x = x0; x < h_end; ++x) {
             h[x] = std::min(here[x], here[x + 1]);
-            hm = std::max(hm, h[x]);
-            low = std::min(low, h[x]);
-            sum += 0.f * h[x];
+            hm = std::max(hm, std::bit_cast<std::int32_t>(h[x]));
           }
           if (has_below) {
-#pragma omp simd reduction(max : vm) reduction(min : low) reduction(+ : sum)
+#pragma omp simd reduction(max : vm)
             for (std::ptrdiff_t x = x0; x < x1; ++x) {
               v[x] = std::min(here[x], below[x]);
-              vm = std::max(vm, v[x]);
-              low = std::min(low, v[x]);
-              sum += 0.f * v[x];
+              vm = std::max(vm, std::bit_cast<std::int32_t>(v[x]));
             }
           }
-          h_max[ty * tiles_x + tx] = hm;
-          v_max[ty * tiles_x + tx] = vm;
+          float& h_tile = h_max[ty * tiles_x + tx];
+          float& v_tile = v_max[ty * tiles_x + tx];
+          h_tile = std::max(h_tile, std::bit_cast<float>(hm));
+          v_tile = std::max(v_tile, std::bit_cast<float>(vm));
         }
       }
-      smallest[ty] = low;
-      probe[ty] = sum;
     }
   }
   if (bad_value) throw_bad_conductance(value, to_link);
