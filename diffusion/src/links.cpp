@@ -61,10 +61,7 @@ void LinkField::finish() {
 }
 
 void LinkField::set_activity(const std::vector<float>& horizontal_max,
-                             const std::vector<float>& vertical_max,
-                             const std::vector<float>& smallest, const std::vector<float>& probe) {
-  for (std::size_t i = 0; i < smallest.size(); ++i)
-    if (smallest[i] < 0 || probe[i] != 0) throw_first_invalid_link();
+                             const std::vector<float>& vertical_max) {
   float largest = 0;
   for (std::size_t i = 0; i < horizontal_max.size(); ++i) {
     horizontal_active_[i] = horizontal_max[i] > 0;

@@ -35,11 +35,10 @@ class LinkField {
   // border links.
   void finish();
 
-  // What finish() does, for a builder that found the per-tile maxima of the links (tile
-  // (tx, ty) at ty * tiles_x() + tx) while writing them: smallest and probe are per tile row,
-  // the smallest link and the sum of 0 * link (non-zero iff a link is NaN or infinite).
-  void set_activity(const std::vector<float>& horizontal_max, const std::vector<float>& vertical_max,
-                    const std::vector<float>& smallest, const std::vector<float>& probe);
+  // What finish() does, for a builder that checked its links and found the largest of each
+  // tile (tile (tx, ty) at ty * tiles_x() + tx) while writing them.
+  void set_activity(const std::vector<float>& horizontal_max,
+                    const std::vector<float>& vertical_max);
 
   std::ptrdiff_t tiles_x() const { return tiles_x_; }
   std::ptrdiff_t tiles_y() const { return tiles_y_; }

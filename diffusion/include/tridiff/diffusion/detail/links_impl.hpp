@@ -37,8 +37,7 @@ LinkField links_from_pixels(ConstPlane value, ToLink to_link, int threads) {
   const std::ptrdiff_t tiles_x = links.tiles_x();
   // Per tile: the largest horizontal and vertical link, found while the links are written.
   std::vector<float> h_max(tiles_x * links.tiles_y(), 0.f), v_max(h_max.size(), 0.f);
-  std::vector<float> smallest(links.tiles_y(), 0.f), probe(links.tiles_y(), 0.f);  // stay 0:
-  // the conductances are checked instead (bad_value), and valid ones give valid links.
+  // The conductances are checked (bad_value); valid ones give valid links.
   constexpr std::int32_t kInfinity = 0x7f800000;
   bool bad_value = false;
 #pragma omp parallel num_threads(team) reduction(|| : bad_value)
@@ -112,7 +111,7 @@ LinkField links_from_pixels(ConstPlane value, ToLink to_link, int threads) {
     }
   }
   if (bad_value) throw_bad_conductance(value, to_link);
-  links.set_activity(h_max, v_max, smallest, probe);
+  links.set_activity(h_max, v_max);
   return links;
 }
 
