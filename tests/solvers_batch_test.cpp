@@ -565,19 +565,36 @@ TYPED_TEST(SolverDiffusionBatch, ConservesMass) {
         }
 }
 
+// Every part (real; real and imaginary for complex, A being real) of x lies within
+// [min, max] of the same part of rhs, widened by `slack` (the maximum principle).
+template <class T>
+void expect_within_range(const std::vector<T>& x, const std::vector<T>& rhs, long double slack,
+                         std::ptrdiff_t system) {
+  auto parts = [](const T& v) -> std::vector<real_t<T>> {
+    if constexpr (is_complex_v<T>)
+      return {v.real(), v.imag()};
+    else
+      return {v};
+  };
+  for (std::size_t p = 0; p < parts(T()).size(); ++p) {
+    long double low = INFINITY, high = -INFINITY;
+    for (const T& v : rhs) {
+      low = std::min<long double>(low, parts(v)[p]);
+      high = std::max<long double>(high, parts(v)[p]);
+    }
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      EXPECT_GE(parts(x[i])[p], low - slack) << "system " << system << ", row " << i;
+      EXPECT_LE(parts(x[i])[p], high + slack) << "system " << system << ", row " << i;
+    }
+  }
+}
+
 // The diffusion matrix is an M-matrix whose rows sum to 1, so A^-1 >= 0 and A^-1 1 = 1: x is a
 // convex combination of rhs and min(rhs) <= x <= max(rhs) (for complex, separately for the
 // real and imaginary parts, A being real). Rounding: ||A^-1||_inf = 1, so
 // |x - x_exact| <= ||rhs - A x||_inf <= eta (||A||_inf ||x||_inf + ||rhs||_inf).
 TYPED_TEST(SolverDiffusionBatch, ObeysMaximumPrinciple) {
   using T = TypeParam;
-  using R = real_t<T>;
-  auto parts = [](const T& v) -> std::vector<R> {
-    if constexpr (is_complex_v<T>)
-      return {v.real(), v.imag()};
-    else
-      return {v};
-  };
   for (bool periodic : {false, true})
     for (std::ptrdiff_t n : {2, 5, 40, 1000})
       for (std::ptrdiff_t count : {1, 33, 100})
@@ -599,17 +616,7 @@ TYPED_TEST(SolverDiffusionBatch, ObeysMaximumPrinciple) {
               }
               const long double slack =
                   backward_bound<T>(method, n) * (norm_a * norm_x + norm_rhs);
-              for (std::size_t p = 0; p < parts(T()).size(); ++p) {
-                long double low = INFINITY, high = -INFINITY;
-                for (const T& v : batch.rhs[s]) {
-                  low = std::min<long double>(low, parts(v)[p]);
-                  high = std::max<long double>(high, parts(v)[p]);
-                }
-                for (std::ptrdiff_t i = 0; i < n; ++i) {
-                  ASSERT_GE(parts(xs[i])[p], low - slack) << "system " << s << ", row " << i;
-                  ASSERT_LE(parts(xs[i])[p], high + slack) << "system " << s << ", row " << i;
-                }
-              }
+              expect_within_range(xs, batch.rhs[s], slack, s);
             }
           }
         }
@@ -623,13 +630,6 @@ TYPED_TEST(SolverDiffusionBatch, ObeysMaximumPrinciple) {
 // (The expanded methods subtract, and are held only to the normwise bound above.)
 TYPED_TEST(SolverDiffusionBatch, LargeBetaKeepsSolutionWithinRhsRange) {
   using T = TypeParam;
-  using R = real_t<T>;
-  auto parts = [](const T& v) -> std::vector<R> {
-    if constexpr (is_complex_v<T>)
-      return {v.real(), v.imag()};
-    else
-      return {v};
-  };
   for (std::ptrdiff_t n : {2, 40, 1000})
     for (std::ptrdiff_t count : {1, 33, 100})
       for (Kind kind : kKinds) {
@@ -643,17 +643,7 @@ TYPED_TEST(SolverDiffusionBatch, LargeBetaKeepsSolutionWithinRhsRange) {
             long double norm_rhs = 0;
             for (const T& v : batch.rhs[s]) norm_rhs = std::max(norm_rhs, magnitude(v));
             const long double slack = 8 * (n + 1) * unit_roundoff<T>() * norm_rhs;
-            for (std::size_t p = 0; p < parts(T()).size(); ++p) {
-              long double low = INFINITY, high = -INFINITY;
-              for (const T& v : batch.rhs[s]) {
-                low = std::min<long double>(low, parts(v)[p]);
-                high = std::max<long double>(high, parts(v)[p]);
-              }
-              for (std::ptrdiff_t i = 0; i < n; ++i) {
-                ASSERT_GE(parts(xs[i])[p], low - slack) << "system " << s << ", row " << i;
-                ASSERT_LE(parts(xs[i])[p], high + slack) << "system " << s << ", row " << i;
-              }
-            }
+            expect_within_range(xs, batch.rhs[s], slack, s);
           }
         }
       }
