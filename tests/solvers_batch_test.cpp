@@ -630,6 +630,7 @@ TYPED_TEST(SolverDiffusionBatch, ObeysMaximumPrinciple) {
 // (The expanded methods subtract, and are held only to the normwise bound above.)
 TYPED_TEST(SolverDiffusionBatch, LargeBetaKeepsSolutionWithinRhsRange) {
   using T = TypeParam;
+  using R = real_t<T>;
   for (std::ptrdiff_t n : {2, 40, 1000})
     for (std::ptrdiff_t count : {1, 33, 100})
       for (Kind kind : kKinds) {
