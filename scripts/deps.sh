@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Installs the Debian packages tridiff needs that are not installed yet (run as root, or with
 # sudo available). Installs nothing when everything is present.
+#   bash scripts/deps.sh              # the build, tests and benchmarks
+#   bash scripts/deps.sh notebooks    # those plus the notebooks' Python (scripts/notebooks.sh)
 set -euo pipefail
 
 packages=(
@@ -8,10 +10,23 @@ packages=(
   libeigen3-dev             # tests: the long-double LU reference
   libgtest-dev              # tests
   libbenchmark-dev          # benchmarks
+  libfftw3-dev              # blur: FFT convolution (single precision, OpenMP threads)
   liblapack-dev             # tests and benchmarks only: LAPACK ?gtsv as the yardstick
+  libopencv-dev             # benchmarks only: cv::GaussianBlur as the blur yardstick
   libopenimageio-dev        # image reading and writing
   openimageio-tools         # Debian 12: OpenImageIO's CMake config fails without the tools
 )
+# The notebooks (notebooks/*.ipynb) run on Debian's Python: no other package index is needed.
+notebook_packages=(
+  python3-numpy python3-matplotlib
+  python3-nbformat python3-nbclient python3-ipykernel jupyter-nbconvert
+)
+for group in "$@"; do
+  case "$group" in
+    notebooks) packages+=("${notebook_packages[@]}") ;;
+    *) echo "scripts/deps.sh: unknown group '$group' (expected: notebooks)" >&2; exit 2 ;;
+  esac
+done
 
 missing=()
 for p in "${packages[@]}"; do

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Tests of the `tridiff` command line, run by CTest:
 #   cli_test.sh TRIDIFF_BINARY WORK_DIR CASE
-# CASE is one of: help, dof, roundtrip, errors. Every check prints what it ran and what it saw
+# CASE is one of: help, dof, roundtrip, errors, ipf. Every check prints what it ran and what it saw
 # when it fails; the script exits non-zero if any check failed.
 set -u
 
@@ -227,6 +227,49 @@ errors)
   run dof --color "$work/color.exr" --depth "$work/depth.exr" -o "$d/ok.png"
   expect_status 0 "valid files"
   expect_file "$d/ok.png" "valid files"
+  ;;
+
+ipf)
+  # The Inverse Post Filter model on the built-in scene at 160 x 90, mask 17, four parts:
+  # lines of 160/4 + 16 = 56 stages; each part (90 + 16) x 56 + 16 = 5952 clocks, 23 808 in all;
+  # reads 14 400 pixels + 3 boundaries x 16 halo columns x 90 lines = 18 720, writes 14 400:
+  # 18 720 x 8 + 14 400 x 4 = 207 360 bytes.
+  d=$work/out
+  mkdir -p "$d"
+  run ipf --width 160 --height 90 --mask 17 --parts 4 --clock-mhz 310 --bandwidth-gbs 20 --check \
+    -o "$d/ipf.png"
+  expect_status 0 "ipf on the built-in scene"
+  expect_file "$d/ipf.png" "ipf"
+  expect_size "$d/ipf.png" "160 x 90"
+  expect_in "$out" "16 pipes" "ipf pipes"
+  expect_in "$out" "line 56 stages" "ipf line length"
+  expect_in "$out" "23808 pipe steps per frame for 14400 pixels" "ipf clocks"
+  expect_in "$out" "23808 clocks run (= the estimate)" "ipf model clocks"
+  expect_in "$out" "18720 pixels read, 14400 written, 0.20736 MB" "ipf memory"
+  expect_in "$out" "1 pixel(s)/clock at 310 MHz" "ipf pixels per clock"
+  expect_in "$out" "software ipf method: identical" "ipf --check"
+  expect_only_files "$d" ipf.png
+
+  run ipf --program laplacian --width 160 --height 90 --mask 3 --parts 2 --check -o "$d/lap.png"
+  expect_status 0 "ipf --program laplacian"
+  expect_file "$d/lap.png" "laplacian"
+  expect_in "$out" "direct convolution: identical" "laplacian --check"
+
+  run ipf --help
+  expect_status 0 "ipf --help"
+  expect_in "$out" "--pixels-per-clock" "ipf --help"
+  expect_in "$out" "--focus" "ipf --help"
+  run methods
+  expect_in "$out" "ipf" "tridiff methods lists ipf"
+
+  for bad in "--mask 4" "--mask 1" "--parts 0" "--clock-mhz 0" "--bandwidth-gbs -1" \
+    "--pixels-per-clock 0" "--program blur" "--color-weight-bits 4"; do
+    # shellcheck disable=SC2086
+    run ipf --width 32 --height 18 $bad -o "$d/bad.png"
+    expect_status nonzero "ipf $bad"
+    expect_in "$err" "${bad%% *}" "ipf $bad names the option"
+  done
+  expect_only_files "$d" ipf.png lap.png
   ;;
 
 *)

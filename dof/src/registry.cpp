@@ -9,6 +9,7 @@ namespace tridiff {
 namespace dof_detail {
 void run_adi(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
 void run_mpad(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
+void run_ipf(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
 }  // namespace dof_detail
 
 namespace {
@@ -18,6 +19,8 @@ constexpr std::array kMethods{
               false, true, "O(pixels), independent of the CoC", dof_detail::run_adi},
     DofMethod{"mpad", "multi-pass anisotropic diffusion, explicit steps (seed 000 §5.3.4)",
               false, false, "O(pixels x max CoC^2 / 8) steps", dof_detail::run_mpad},
+    DofMethod{"ipf", "Inverse Post Filter scatter, depth test, 8-bit registers (seed 004 §5)",
+              true, false, "O(pixels x min(max |CoC|, 16)^2)", dof_detail::run_ipf},
 };
 
 }  // namespace

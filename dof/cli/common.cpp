@@ -1,0 +1,188 @@
+// Option parsing and frame loading shared by `tridiff dof` and `tridiff ipf`.
+#include "common.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <sstream>
+
+#include "tridiff/dof/lens.hpp"
+#include "tridiff/dof/scene.hpp"
+#include "tridiff/image/io.hpp"
+
+namespace tridiff::cli {
+
+bool Arguments::flag(const std::string& key) const {
+  return std::find(flags.begin(), flags.end(), key) != flags.end();
+}
+
+std::string Arguments::text(const std::string& key, const std::string& fallback) const {
+  auto it = values.find(key);
+  return it == values.end() ? fallback : it->second;
+}
+
+float Arguments::number(const std::string& key, float fallback) const {
+  auto it = values.find(key);
+  if (it == values.end()) return fallback;
+  char* end = nullptr;
+  const float value = std::strtof(it->second.c_str(), &end);
+  if (end == it->second.c_str() || *end != '\0' || !std::isfinite(value))
+    throw InvalidArgument("--" + key, -1, -1, "'" + it->second + "' is not a number");
+  return value;
+}
+
+int Arguments::integer(const std::string& key, int fallback) const {
+  const float value = number(key, float(fallback));
+  if (value != std::floor(value)) throw InvalidArgument("--" + key, -1, -1, "must be an integer");
+  return int(value);
+}
+
+const std::vector<std::string> kInputOptions = {
+    "color",    "depth",          "depth-channel", "depth-convention", "near",
+    "far",      "color-encoding", "width",         "height",           "focus",
+    "f-number", "focal-length",   "sensor-width",  "max-coc",          "near-start",
+    "near-end", "near-radius",    "far-start",     "far-end",          "far-radius",
+    "threads"};
+
+const char* const kInputUsage = R"(input
+  --color FILE              colour image (PNG, JPEG, TIFF, OpenEXR, ...)
+  --depth FILE              depth map; may be the colour file itself (an EXR with a Z channel)
+  --depth-channel NAME      channel holding depth (default: Z, else depth, else the first)
+  --depth-convention C      linear (distance, default) | normalized (needs --near, --far) | inverse
+  --near M, --far M         planes for the normalized convention, metres
+  --color-encoding E        auto (default: 8/16-bit sRGB, float linear) | srgb | linear
+  --width W, --height H     size of the built-in scene (default 1920 x 1080)
+lens (thin lens, seed 000 eq. 3.2)
+  --focus M                 focus distance, metres (default 3.2; built-in scene: 3.95, its sphere)
+  --f-number N              aperture f-number (default 2.8; built-in scene: 1.8)
+  --focal-length MM         focal length (default 50)
+  --sensor-width MM         sensor width the image spans (default 36)
+  --max-coc PX              clamp of the circle of confusion diameter (default 64)
+artist curve (seed 002 §28.5.3; replaces the lens when any is given)
+  --near-start M --near-end M --near-radius PX   near blur: radius at near-start, 0 from near-end
+  --far-start M --far-end M --far-radius PX      far blur: 0 up to far-start, radius from far-end
+)";
+
+Arguments parse(int argc, char** argv, int first, const std::vector<std::string>& flags,
+                const std::vector<std::string>& valued) {
+  Arguments args;
+  for (int i = first; i < argc; ++i) {
+    std::string key = argv[i];
+    if (key == "-o") key = "--output";
+    if (key == "-h") key = "--help";
+    if (key.rfind("--", 0) != 0) throw InvalidArgument(key, -1, -1, "unexpected argument");
+    key = key.substr(2);
+    if (std::find(flags.begin(), flags.end(), key) != flags.end()) {
+      args.flags.push_back(key);
+      continue;
+    }
+    if (std::find(valued.begin(), valued.end(), key) == valued.end())
+      throw InvalidArgument("--" + key, -1, -1, "unknown option (see tridiff --help)");
+    if (i + 1 >= argc) throw InvalidArgument("--" + key, -1, -1, "needs a value");
+    args.values[key] = argv[++i];
+  }
+  return args;
+}
+
+namespace {
+
+ColorEncoding parse_encoding(const std::string& text) {
+  if (text == "auto") return ColorEncoding::Auto;
+  if (text == "srgb") return ColorEncoding::Srgb;
+  if (text == "linear") return ColorEncoding::Linear;
+  throw InvalidArgument("--color-encoding", -1, -1, "'" + text + "' is not auto, srgb or linear");
+}
+
+DepthConvention parse_convention(const std::string& text) {
+  if (text == "linear") return DepthConvention::Linear;
+  if (text == "normalized") return DepthConvention::Normalized;
+  if (text == "inverse") return DepthConvention::Inverse;
+  throw InvalidArgument("--depth-convention", -1, -1,
+                        "'" + text + "' is not linear, normalized or inverse");
+}
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// Colour and depth from files, or the built-in scene (whose lens replaces the default one).
+void load_images(const Arguments& args, int threads, Frame& frame, ThinLens& lens) {
+  if (args.has("color")) {
+    if (!args.has("depth")) throw InvalidArgument("--depth", -1, -1, "is required with --color");
+    frame.color =
+        read_color(args.text("color", ""), parse_encoding(args.text("color-encoding", "auto")))
+            .pixels;
+    DepthOptions depth_options;
+    depth_options.channel = args.text("depth-channel", "");
+    depth_options.convention = parse_convention(args.text("depth-convention", "linear"));
+    depth_options.near_plane = args.number("near", 0.f);
+    depth_options.far_plane = args.number("far", 0.f);
+    frame.depth = read_depth(args.text("depth", ""), depth_options);
+    if (frame.depth.width() != frame.color.width() || frame.depth.height() != frame.color.height())
+      throw ImageIoError("tridiff: " + args.text("depth", "") + ": depth is " +
+                         std::to_string(frame.depth.width()) + " x " +
+                         std::to_string(frame.depth.height()) + " but the colour image " +
+                         args.text("color", "") + " is " + std::to_string(frame.color.width()) +
+                         " x " + std::to_string(frame.color.height()));
+    frame.source = args.text("color", "") + " + " + args.text("depth", "");
+    return;
+  }
+  if (args.has("depth")) throw InvalidArgument("--color", -1, -1, "is required with --depth");
+  const int width = args.integer("width", 1920), height = args.integer("height", 1080);
+  if (width < 1 || height < 1 || width > 16384 || height > 16384)
+    throw InvalidArgument("--width/--height", -1, -1, "must be in [1, 16384]");
+  Scene scene = procedural_scene(width, height, threads);
+  frame.color = std::move(scene.color);
+  frame.depth = std::move(scene.depth);
+  lens = scene.lens;
+  frame.source = "built-in scene " + std::to_string(width) + " x " + std::to_string(height);
+}
+
+// The thin lens, or the artist curve when any of its options is given.
+void compute_coc(const Arguments& args, int threads, ThinLens lens, Frame& frame) {
+  frame.coc.reset(frame.color.width(), frame.color.height(), 1);
+  const bool curve = args.has("near-start") || args.has("near-end") || args.has("near-radius") ||
+                     args.has("far-start") || args.has("far-end") || args.has("far-radius");
+  std::ostringstream model;
+  if (curve) {
+    ArtistCurve c;
+    c.near_start_m = args.number("near-start", 0);
+    c.near_end_m = args.number("near-end", 0);
+    c.near_radius_px = args.number("near-radius", 0);
+    c.far_start_m = args.number("far-start", 0);
+    c.far_end_m = args.number("far-end", 0);
+    c.far_radius_px = args.number("far-radius", 0);
+    coc_artist_curve(frame.coc.plane(0), frame.depth.plane(0), c, threads);
+    model << "artist curve: near " << c.near_start_m << "-" << c.near_end_m << " m radius "
+          << c.near_radius_px << " px, far " << c.far_start_m << "-" << c.far_end_m << " m radius "
+          << c.far_radius_px << " px";
+  } else {
+    lens.focus_distance_m = args.number("focus", lens.focus_distance_m);
+    lens.f_number = args.number("f-number", lens.f_number);
+    lens.focal_length_mm = args.number("focal-length", lens.focal_length_mm);
+    lens.sensor_width_mm = args.number("sensor-width", lens.sensor_width_mm);
+    lens.max_coc_px = args.number("max-coc", lens.max_coc_px);
+    coc_thin_lens(frame.coc.plane(0), frame.depth.plane(0), lens, threads);
+    model << "thin lens: focus " << lens.focus_distance_m << " m, f/" << lens.f_number << ", "
+          << lens.focal_length_mm << " mm, sensor " << lens.sensor_width_mm << " mm, max CoC "
+          << lens.max_coc_px << " px";
+  }
+  frame.coc_model = model.str();
+}
+
+}  // namespace
+
+Frame load_frame(const Arguments& args, int threads) {
+  Frame frame;
+  ThinLens lens;
+  const auto load_start = std::chrono::steady_clock::now();
+  load_images(args, threads, frame, lens);
+  frame.load_seconds = seconds_since(load_start);
+  const auto coc_start = std::chrono::steady_clock::now();
+  compute_coc(args, threads, lens, frame);
+  frame.coc_seconds = seconds_since(coc_start);
+  return frame;
+}
+
+}  // namespace tridiff::cli
