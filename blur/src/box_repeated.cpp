@@ -12,8 +12,8 @@
 
 #include "tridiff/blur/blur.hpp"
 #include "tridiff/blur/box.hpp"
-#include "tridiff/solvers/detail/transpose.hpp"
 #include "tridiff/solvers/solve.hpp"
+#include "row_blocks.hpp"
 
 namespace tridiff {
 
@@ -117,13 +117,17 @@ std::vector<std::ptrdiff_t> margins(std::span<const BoxPass> passes) {
   return m;
 }
 
-// Scratch for one thread: two lane buffers, for the line with its widest margins.
+// Scratch for one thread: two lane buffers, for the line with its widest margins. They are
+// the thread's buffers kept from call to call (row_blocks.hpp), so taking them is cheap even
+// once per block.
 struct LaneScratch {
-  std::vector<float> a, b;
+  float* a;
+  float* b;
   LaneScratch(std::ptrdiff_t n, std::span<const BoxPass> passes) {
     const std::ptrdiff_t margin = passes.empty() ? 0 : margins(passes).front();
-    a.resize((n + 2 * margin) * kLanes);
-    b.resize((n + 2 * margin) * kLanes);
+    const auto floats = static_cast<std::size_t>((n + 2 * margin) * kLanes);
+    a = blur_detail::scratch(blur_detail::kFreeScratchSlot, floats);
+    b = blur_detail::scratch(blur_detail::kFreeScratchSlot + 1, floats);
   }
 };
 
@@ -137,8 +141,8 @@ void run_passes(const float* src, std::ptrdiff_t ss, float* dst, std::ptrdiff_t 
     return;
   }
   if (passes.size() == 1 && src == dst) {
-    run_pass(src, ss, line, scratch.a.data(), kLanes, line, passes[0]);
-    copy_lanes(scratch.a.data(), kLanes, dst, ds, n);
+    run_pass(src, ss, line, scratch.a, kLanes, line, passes[0]);
+    copy_lanes(scratch.a, kLanes, dst, ds, n);
     return;
   }
   const std::vector<std::ptrdiff_t> margin = margins(passes);
@@ -147,7 +151,7 @@ void run_passes(const float* src, std::ptrdiff_t ss, float* dst, std::ptrdiff_t 
   Range current_range = line;
   for (std::size_t k = 0; k < passes.size(); ++k) {
     const bool final_pass = k + 1 == passes.size();
-    float* target = final_pass ? dst : (k % 2 == 0 ? scratch.a.data() : scratch.b.data());
+    float* target = final_pass ? dst : (k % 2 == 0 ? scratch.a : scratch.b);
     const std::ptrdiff_t target_stride = final_pass ? ds : kLanes;
     const Range target_range{-margin[k], n + margin[k]};
     run_pass(current, current_stride, current_range, target, target_stride, target_range,
@@ -185,35 +189,12 @@ void filter_columns(ConstPlane in, Plane out, std::span<const BoxPass> passes, i
   }
 }
 
-// Rows, in place: kLanes rows at a time are transposed into lanes, filtered and transposed
-// back; a last partial block is staged in a full one.
+// Rows, in place: kLanes rows at a time in lane order (row_blocks.hpp), all passes run there.
 void filter_rows(Plane plane, std::span<const BoxPass> passes, int threads) {
-  const std::ptrdiff_t w = plane.width(), h = plane.height();
-  const std::ptrdiff_t blocks = (h + kLanes - 1) / kLanes;
-#pragma omp parallel num_threads(threads)
-  {
+  blur_detail::for_each_row_block<kLanes>(plane, threads, [&](float* lanes, std::ptrdiff_t w) {
     LaneScratch scratch(w, passes);
-    std::vector<float> lanes(w * kLanes), tail;
-#pragma omp for schedule(static)
-    for (std::ptrdiff_t b = 0; b < blocks; ++b) {
-      const std::ptrdiff_t y0 = b * kLanes, rows = std::min<std::ptrdiff_t>(kLanes, h - y0);
-      float* first = plane.row(y0);
-      std::ptrdiff_t pitch = plane.pitch();
-      if (rows < kLanes) {
-        tail.assign(kLanes * w, 0.f);
-        for (std::ptrdiff_t r = 0; r < rows; ++r)
-          std::copy_n(plane.row(y0 + r), w, tail.data() + r * w);
-        first = tail.data();
-        pitch = w;
-      }
-      detail::transpose_into_lanes<float, kLanes>(first, pitch, w, lanes.data());
-      run_passes(lanes.data(), kLanes, lanes.data(), kLanes, w, passes, scratch);
-      detail::transpose_from_lanes<float, kLanes>(lanes.data(), w, first, pitch);
-      if (rows < kLanes)
-        for (std::ptrdiff_t r = 0; r < rows; ++r)
-          std::copy_n(tail.data() + r * w, w, plane.row(y0 + r));
-    }
-  }
+    run_passes(lanes, kLanes, lanes, kLanes, w, passes, scratch);
+  });
 }
 
 }  // namespace

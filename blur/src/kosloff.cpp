@@ -35,7 +35,7 @@
 #include <vector>
 
 #include "tridiff/blur/spreading.hpp"
-#include "tridiff/solvers/detail/transpose.hpp"
+#include "row_blocks.hpp"
 
 namespace tridiff {
 
@@ -118,10 +118,11 @@ class LineSpreader {
     for (const Tap& tap : taps_) {
       const std::ptrdiff_t first = std::max<std::ptrdiff_t>(0, tap.offset);
       const std::ptrdiff_t last = std::min(n_, n_ + tap.offset);
+      const double weight = tap.weight;  // a local: stores to d could alias tap.weight
       for (std::ptrdiff_t q = first; q < last; ++q) {
         const float* x = in + (q - tap.offset) * stride;
         double* dq = d + q * lanes;
-        for (std::ptrdiff_t l = 0; l < lanes; ++l) dq[l] += tap.weight * x[l];
+        for (std::ptrdiff_t l = 0; l < lanes; ++l) dq[l] += weight * x[l];
       }
     }
   }
@@ -179,38 +180,14 @@ void spread_columns(ConstPlane in, Plane out, const SpreadingKernel& kernel, boo
   }
 }
 
-// Rows, in place: kLanes rows at a time are transposed into lanes (so the row pass runs with
-// the same SIMD lanes as the column pass), spread and transposed back; a last partial block is
-// staged in a full one.
+// Rows, in place: kLanes rows at a time in lane order (row_blocks.hpp), so the row pass runs
+// with the same SIMD lanes as the column pass.
 void spread_rows(Plane plane, const SpreadingKernel& kernel, bool replicate, int threads) {
-  const std::ptrdiff_t w = plane.width(), h = plane.height();
-  const LineSpreader spreader(kernel, w, replicate);
-  const std::ptrdiff_t blocks = (h + kLanes - 1) / kLanes;
-#pragma omp parallel num_threads(threads)
-  {
-    std::vector<double> d;
-    std::vector<float> lanes(w * kLanes), staged;
-#pragma omp for schedule(static)
-    for (std::ptrdiff_t b = 0; b < blocks; ++b) {
-      const std::ptrdiff_t y0 = b * kLanes;
-      const std::ptrdiff_t rows = std::min<std::ptrdiff_t>(kLanes, h - y0);
-      float* first = plane.row(y0);
-      std::ptrdiff_t pitch = plane.pitch();
-      if (rows < kLanes) {
-        staged.assign(kLanes * w, 0.f);
-        for (std::ptrdiff_t r = 0; r < rows; ++r)
-          std::copy_n(plane.row(y0 + r), w, staged.data() + r * w);
-        first = staged.data();
-        pitch = w;
-      }
-      detail::transpose_into_lanes<float, kLanes>(first, pitch, w, lanes.data());
-      spreader.run(lanes.data(), kLanes, lanes.data(), kLanes, kLanes, d);
-      detail::transpose_from_lanes<float, kLanes>(lanes.data(), w, first, pitch);
-      if (rows < kLanes)
-        for (std::ptrdiff_t r = 0; r < rows; ++r)
-          std::copy_n(staged.data() + r * w, w, plane.row(y0 + r));
-    }
-  }
+  const LineSpreader spreader(kernel, plane.width(), replicate);
+  blur_detail::for_each_row_block<kLanes>(plane, threads, [&](float* lanes, std::ptrdiff_t) {
+    thread_local std::vector<double> d;  // kept from call to call, as row_blocks.hpp's scratch
+    spreader.run(lanes, kLanes, lanes, kLanes, kLanes, d);
+  });
 }
 
 }  // namespace

@@ -28,7 +28,7 @@ inline constexpr std::ptrdiff_t kTransposeBlock = 32;
 #if defined(__AVX512F__)
 // In-register transpose of 16 rows of 16 floats: interleave pairs of rows, then pairs of
 // pairs, then 128-bit quarters twice.
-inline void transpose_16x16(__m512 r[16]) {
+[[gnu::always_inline]] inline void transpose_16x16(__m512 r[16]) {
   __m512 t[16], u[16];
   for (int k = 0; k < 8; ++k) {
     t[2 * k] = _mm512_unpacklo_ps(r[2 * k], r[2 * k + 1]);
@@ -107,9 +107,16 @@ inline void transpose_from_lanes_16(const T* block, std::ptrdiff_t columns, T* r
 template <class T, int W>
 inline void transpose_into_lanes(const T* rows, std::ptrdiff_t pitch, std::ptrdiff_t columns,
                                  T* block) {
-  for (std::ptrdiff_t k = 0; k < columns; k += 16)
+  // W rows are read side by side, 64 bytes of each at a time: more streams than the hardware
+  // prefetchers follow, so each row is fetched four cache lines ahead (measured: the IIR row
+  // pass 14 -> 12 ms per 4096^2 plane).
+  constexpr std::ptrdiff_t kAhead = 4 * 64 / sizeof(T);
+  for (std::ptrdiff_t k = 0; k < columns; k += 16) {
+    if (k + kAhead < columns)
+      for (int l = 0; l < W; ++l) __builtin_prefetch(rows + l * pitch + k + kAhead);
     transpose_into_lanes_16<T, W>(rows + k, pitch, std::min<std::ptrdiff_t>(16, columns - k),
                                   block + k * W);
+  }
 }
 
 // rows[l * pitch + k] = block[k * W + l] for k < columns, l < W.
