@@ -10,6 +10,7 @@ namespace dof_detail {
 void run_adi(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
 void run_mpad(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
 void run_ipf(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
+void run_scatter(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
 }  // namespace dof_detail
 
 namespace {
@@ -21,6 +22,8 @@ constexpr std::array kMethods{
               false, false, "O(pixels x max CoC^2 / 8) steps", dof_detail::run_mpad},
     DofMethod{"ipf", "Inverse Post Filter scatter, depth test, 8-bit registers (seed 004 §5)",
               true, false, "O(pixels x min(max |CoC|, 16)^2)", dof_detail::run_ipf},
+    DofMethod{"scatter", "the slow reference: area-normalised anti-aliased CoC discs, depth layers",
+              true, false, "O(pixels x CoC^2)", dof_detail::run_scatter},
 };
 
 }  // namespace

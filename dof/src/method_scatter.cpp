@@ -1,0 +1,349 @@
+// The `scatter` method: the slow reference depth of field that the other methods are measured
+// against (issue 5; the forward-mapped "splatting" DOF of seed 000 §3.3 / §6). Every pixel
+// splats its circle of confusion, and the splats are composited by depth.
+//
+// The disc. A pixel of signed CoC c (pixels; negative in front of the focus) spreads over a disc
+// of radius r = |c| / 2 with an anti-aliased edge: the offset (dx, dy) from its centre gets the
+// coverage min(1, r + 1/2 - sqrt(dx² + dy²)) when positive — a radial ramp one pixel wide centred
+// on the disc's rim, so the support is the open disc of radius r + 1/2. The weights are the
+// coverages divided by their sum (area-normalised: a splat's weights sum to 1, so a pixel's
+// energy is conserved). A pixel with |c| < max(1, DofSettings::in_focus_coc_px) is a point: it
+// keeps its own value with weight exactly 1.
+//
+// The frame border is a mirror: the part of a disc that leaves the frame is reflected back into
+// it (coordinate -1 is 0, -2 is 1, ..., W is W - 1; repeatedly for discs larger than the frame),
+// as if the image continued as its mirror image. Every weight therefore lands in the frame.
+//
+// Compositing by depth. The signed CoC is the depth key (more negative = nearer). Pixels are
+// sorted into layers one pixel of CoC wide (layer k holds floor(c) = k) and the layers are taken
+// front to back. Within a layer the splats add up premultiplied colour C and coverage A (the sum
+// of the weights that reach the output pixel); where A > 1 the layer is normalised (C /= A, A = 1),
+// then it goes "over" what lies behind it with alpha = min(A, 1):
+//     out += T · C,   T *= 1 - alpha        (T, the transmittance, starts at 1)
+// so a blurred near object covers what is behind it while a sharp near object (points of weight
+// 1) hides the far splats completely. Finally out /= 1 - T where 1 - T < 1: the far splats are
+// normalised by the accumulated coverage (behind a semi-transparent near edge nothing of the
+// hidden background is known, so what is known is rescaled).
+//
+// What holds exactly (up to float rounding):
+//  - Uniform CoC (one layer): every output pixel's coverage is 1 — the mirror-folded discs of all
+//    pixels tile the frame, because a disc is symmetric under each axis reflection — so out is the
+//    sum of the splats, the convolution of the mirror-extended image with the disc, and the total
+//    energy per channel equals the input's.
+//  - Every pixel in focus: out is the input, bit for bit.
+//  - A pixel whose own layer is the first to reach it with coverage >= 1 (a sharp pixel that no
+//    nearer splat covers) keeps its value bit for bit.
+//  - A constant colour stays constant for any CoC map (the "over" weights telescope to 1 - T).
+// With several layers energy is not conserved (occlusion hides some of it, the final
+// normalisation rescales), which is the point of depth compositing. Splitting a continuous depth
+// into 1-px layers treats the coverages of neighbouring layers as uncorrelated — the usual
+// discretisation of layered compositing.
+//
+// Parallel: each thread owns a band of output rows and, for every layer, splats the part of every
+// disc that falls in its band, then composites its band. No two threads write the same pixel and
+// every pixel receives its contributions in the same order (sources in raster order within a
+// layer), so the result does not depend on the number of threads.
+//
+// Skipping (DofSettings::skip_in_focus): 32 x 32 tiles that no disc reaches (after the mirror
+// fold) hold only points, whose output is their input; they are copied and left out of the layer
+// passes. This changes no bit.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "tridiff/dof/method.hpp"
+#include "tridiff/solvers/solve.hpp"
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+namespace tridiff {
+namespace {
+
+constexpr std::ptrdiff_t kTile = 32;
+constexpr float kMaxDiameter = 16384.f;  // px
+
+// The mirror fold of coordinate x into [0, n): the frame continued as its mirror image.
+inline std::ptrdiff_t fold(std::ptrdiff_t x, std::ptrdiff_t n) {
+  if (x >= 0 && x < n) return x;
+  const std::ptrdiff_t period = 2 * n;
+  std::ptrdiff_t m = x % period;
+  if (m < 0) m += period;
+  return m < n ? m : period - 1 - m;
+}
+
+// A range [lo, hi] that contains fold(x) for every x in [a, b], where a < n and b >= 0.
+std::pair<std::ptrdiff_t, std::ptrdiff_t> folded_range(std::ptrdiff_t a, std::ptrdiff_t b,
+                                                       std::ptrdiff_t n) {
+  if (a < -n || b >= 2 * n) return {0, n - 1};
+  std::ptrdiff_t lo = std::max<std::ptrdiff_t>(a, 0), hi = std::min(b, n - 1);
+  if (a < 0) hi = std::max(hi, std::min(n - 1, -1 - a));
+  if (b >= n) lo = std::min(lo, std::max<std::ptrdiff_t>(0, 2 * n - 1 - b));
+  return {lo, hi};
+}
+
+// The disc of one pixel: outer = r + 1/2 bounds the support, reach the largest |dy| (and |dx|)
+// with a positive coverage, inv_sum 1 / (sum of the coverages). A point has reach -1.
+struct Disc {
+  double inv_sum = 1;
+  float outer = 0;
+  std::int32_t reach = -1;
+};
+
+inline double coverage(double outer, std::ptrdiff_t dx, std::ptrdiff_t dy) {
+  return std::min(1.0, outer - std::sqrt(double(dx * dx + dy * dy)));
+}
+
+// The half-width of row dy of the disc (a bound; coverage() decides).
+inline std::ptrdiff_t row_half_width(double outer, std::ptrdiff_t dy) {
+  const double s = outer * outer - double(dy * dy);
+  return s > 0 ? static_cast<std::ptrdiff_t>(std::floor(std::sqrt(s))) : -1;
+}
+
+Disc make_disc(float coc, float point_below) {
+  Disc disc;
+  const double diameter = std::fabs(double(coc));
+  if (diameter < point_below) return disc;
+  disc.outer = static_cast<float>(0.5 * diameter + 0.5);
+  disc.reach = static_cast<std::int32_t>(std::ceil(disc.outer)) - 1;
+  // The sum of the coverages over one quadrant, by symmetry: the centre once, the axes twice
+  // (two half-axes each), the rest four times.
+  double sum = 0;
+  for (std::ptrdiff_t dy = 0; dy <= disc.reach; ++dy) {
+    const std::ptrdiff_t hx = row_half_width(disc.outer, dy);
+    for (std::ptrdiff_t dx = 0; dx <= hx; ++dx) {
+      const double c = coverage(disc.outer, dx, dy);
+      if (c > 0) sum += c * ((dx == 0 ? 1 : 2) * (dy == 0 ? 1 : 2));
+    }
+  }
+  disc.inv_sum = 1.0 / sum;  // sum >= 1: the centre's coverage is 1 for a diameter >= 1
+  return disc;
+}
+
+// The depth layer of a signed CoC: floor(c), more negative = nearer.
+inline std::int32_t layer_key(float coc) {
+  return static_cast<std::int32_t>(std::floor(std::clamp(double(coc), -1e9, 1e9)));
+}
+
+struct Box {
+  std::ptrdiff_t x0, y0, x1, y1;  // [x0, x1) x [y0, y1); empty when x0 >= x1
+  void add(std::ptrdiff_t x, std::ptrdiff_t y) {
+    x0 = std::min(x0, x);
+    x1 = std::max(x1, x + 1);
+    y0 = std::min(y0, y);
+    y1 = std::max(y1, y + 1);
+  }
+};
+
+}  // namespace
+
+namespace dof_detail {
+
+void run_scatter(Image& out, const Image& color, ConstPlane coc, const DofSettings& settings,
+                 DofReport& report) {
+  validate_dof_input(color, coc);
+  const int team = detail::resolve_threads(settings.threads);
+  const std::ptrdiff_t width = color.width(), height = color.height();
+  const int channels = color.channels();
+  const float point_below = std::max(1.f, settings.in_focus_coc_px);
+  if (width * height > std::numeric_limits<std::int32_t>::max())
+    throw InvalidArgument("color", -1, -1, "has more than 2^31 pixels");
+  // A disc beyond kMaxDiameter px would take hours; refuse it rather than clamp it silently.
+  for (std::ptrdiff_t y = 0; y < height; ++y)
+    for (std::ptrdiff_t x = 0; x < width; ++x)
+      if (std::fabs(coc(x, y)) > kMaxDiameter)
+        throw InvalidArgument("coc", -1, -1,
+                              "pixel (" + std::to_string(x) + ", " + std::to_string(y) +
+                                  ") has |CoC| " + std::to_string(std::fabs(coc(x, y))) +
+                                  " px; the scatter reference takes at most " +
+                                  std::to_string(int(kMaxDiameter)) + " px");
+  using Clock = std::chrono::steady_clock;
+  auto seconds_since = [](Clock::time_point t) {
+    return std::chrono::duration<double>(Clock::now() - t).count();
+  };
+
+  // 1. Every pixel's disc (its normaliser: a sum over the whole disc, computed once).
+  auto start = Clock::now();
+  std::vector<Disc> discs(std::size_t(width * height));
+#pragma omp parallel for num_threads(team) schedule(static)
+  for (std::ptrdiff_t y = 0; y < height; ++y) {
+    float last_coc = 0;
+    Disc last = make_disc(0.f, point_below);
+    for (std::ptrdiff_t x = 0; x < width; ++x) {
+      const float c = std::fabs(coc(x, y));
+      if (c != last_coc) {
+        last = make_disc(c, point_below);
+        last_coc = c;
+      }
+      discs[std::size_t(y * width + x)] = last;
+    }
+  }
+
+  // 2. The tiles that some disc reaches (all of them without skipping).
+  const std::ptrdiff_t tiles_x = (width + kTile - 1) / kTile,
+                       tiles_y = (height + kTile - 1) / kTile;
+  std::vector<char> worked(std::size_t(tiles_x * tiles_y), settings.skip_in_focus ? 0 : 1);
+  if (settings.skip_in_focus) {
+    std::vector<std::ptrdiff_t> tile_reach(worked.size(), -1);
+#pragma omp parallel for num_threads(team) schedule(static)
+    for (std::ptrdiff_t t = 0; t < tiles_x * tiles_y; ++t) {
+      const std::ptrdiff_t tx = t % tiles_x * kTile, ty = t / tiles_x * kTile;
+      for (std::ptrdiff_t y = ty; y < std::min(ty + kTile, height); ++y)
+        for (std::ptrdiff_t x = tx; x < std::min(tx + kTile, width); ++x)
+          tile_reach[t] =
+              std::max<std::ptrdiff_t>(tile_reach[t], discs[std::size_t(y * width + x)].reach);
+    }
+    for (std::ptrdiff_t t = 0; t < tiles_x * tiles_y; ++t) {
+      const std::ptrdiff_t reach = tile_reach[t];
+      if (reach < 0) continue;
+      const std::ptrdiff_t tx = t % tiles_x * kTile, ty = t / tiles_x * kTile;
+      const auto [x0, x1] =
+          folded_range(tx - reach, std::min(tx + kTile, width) - 1 + reach, width);
+      const auto [y0, y1] =
+          folded_range(ty - reach, std::min(ty + kTile, height) - 1 + reach, height);
+      for (std::ptrdiff_t j = y0 / kTile; j <= y1 / kTile; ++j)
+        for (std::ptrdiff_t i = x0 / kTile; i <= x1 / kTile; ++i) worked[j * tiles_x + i] = 1;
+    }
+  }
+  std::ptrdiff_t skipped = 0;
+  for (std::ptrdiff_t t = 0; t < tiles_x * tiles_y; ++t)
+    if (!worked[t])
+      skipped += (std::min(t % tiles_x * kTile + kTile, width) - t % tiles_x * kTile) *
+                 (std::min(t / tiles_x * kTile + kTile, height) - t / tiles_x * kTile);
+  auto tile_worked = [&](std::ptrdiff_t x, std::ptrdiff_t y) {
+    return worked[std::size_t(y / kTile * tiles_x + x / kTile)] != 0;
+  };
+
+  // 3. The sources of the worked tiles sorted into depth layers, raster order within a layer.
+  std::vector<std::pair<std::int32_t, std::int32_t>> sources;
+  sources.reserve(std::size_t(width * height - skipped));
+  for (std::ptrdiff_t y = 0; y < height; ++y)
+    for (std::ptrdiff_t x = 0; x < width; ++x)
+      if (tile_worked(x, y))
+        sources.emplace_back(layer_key(coc(x, y)), std::int32_t(y * width + x));
+  std::sort(sources.begin(), sources.end());
+  std::vector<std::size_t> layer_start;
+  for (std::size_t i = 0; i < sources.size(); ++i)
+    if (i == 0 || sources[i].first != sources[i - 1].first) layer_start.push_back(i);
+  const std::size_t layers = layer_start.size();
+  layer_start.push_back(sources.size());
+  report.stages.push_back({"discs and layers", seconds_since(start)});
+
+  // 4. Splat and composite, layer by layer, each thread in its band of rows.
+  start = Clock::now();
+  out.reset(width, height, channels);
+  // The layer: premultiplied colour (channels planes), then coverage, in double — thousands of
+  // similar small weights added to a float drift by a systematic rounding (1e-4 for D = 130).
+  const std::size_t plane_size = std::size_t(width * height);
+  std::vector<double> layer(plane_size * std::size_t(channels + 1), 0.0);
+  double* const cover = layer.data() + plane_size * std::size_t(channels);
+  auto at = [&](std::ptrdiff_t x, std::ptrdiff_t y) { return std::size_t(y * width + x); };
+  Image transmit(width, height, 1);
+  for (std::ptrdiff_t y = 0; y < height; ++y) std::fill_n(transmit.plane(0).row(y), width, 1.f);
+  const Plane trans = transmit.plane(0);
+
+#pragma omp parallel num_threads(team)
+  {
+#ifdef _OPENMP
+    const int thread = omp_get_thread_num(), threads = omp_get_num_threads();
+#else
+    const int thread = 0, threads = 1;
+#endif
+    const std::ptrdiff_t band0 = height * thread / threads, band1 = height * (thread + 1) / threads;
+    std::vector<double> lanes(static_cast<std::size_t>(channels));
+    for (std::size_t l = 0; l < layers && band0 < band1; ++l) {
+      Box box{width, height, 0, 0};
+      for (std::size_t s = layer_start[l]; s < layer_start[l + 1]; ++s) {
+        const std::ptrdiff_t index = sources[s].second;
+        const std::ptrdiff_t qx = index % width, qy = index / width;
+        const Disc& disc = discs[std::size_t(index)];
+        if (disc.reach < 0) {  // a point: weight 1 at its own pixel
+          if (qy < band0 || qy >= band1) continue;
+          const std::size_t i = at(qx, qy);
+          const double a = cover[i];
+          for (int c = 0; c < channels; ++c) {
+            double& v = layer[i + plane_size * std::size_t(c)];
+            v = a == 0 ? double(color(qx, qy, c)) : v + double(color(qx, qy, c));
+          }
+          cover[i] = a + 1.0;
+          box.add(qx, qy);
+          continue;
+        }
+        const std::ptrdiff_t reach = disc.reach;
+        if (qy - reach >= 0 && qy + reach < height && (qy + reach < band0 || qy - reach >= band1))
+          continue;  // no fold, and the disc's rows miss the band
+        for (int c = 0; c < channels; ++c) lanes[std::size_t(c)] = double(color(qx, qy, c));
+        for (std::ptrdiff_t dy = -reach; dy <= reach; ++dy) {
+          const std::ptrdiff_t ty = fold(qy + dy, height);
+          if (ty < band0 || ty >= band1) continue;
+          const std::ptrdiff_t hx = row_half_width(disc.outer, dy);
+          if (hx < 0) continue;
+          const bool inside = qx - hx >= 0 && qx + hx < width;
+          double* cover_row = cover + at(0, ty);
+          double* colour_row = layer.data() + at(0, ty);
+          for (std::ptrdiff_t dx = -hx; dx <= hx; ++dx) {
+            const double cov = coverage(disc.outer, dx, dy);
+            if (!(cov > 0)) continue;
+            const double w = cov * disc.inv_sum;
+            const std::ptrdiff_t tx = inside ? qx + dx : fold(qx + dx, width);
+            const double a = cover_row[tx];
+            for (int c = 0; c < channels; ++c) {
+              double& v = colour_row[std::size_t(tx) + plane_size * std::size_t(c)];
+              v = a == 0 ? w * lanes[std::size_t(c)] : v + w * lanes[std::size_t(c)];
+            }
+            cover_row[tx] = a + w;
+            box.add(tx, ty);
+          }
+        }
+      }
+      // Composite the layer "over" what is in front of it, and clear it.
+      for (std::ptrdiff_t y = box.y0; y < box.y1; ++y) {
+        double* cover_row = cover + at(0, y);
+        double* colour_row = layer.data() + at(0, y);
+        float* trans_row = trans.row(y);
+        for (std::ptrdiff_t x = box.x0; x < box.x1; ++x) {
+          const double a = cover_row[x];
+          if (a == 0) continue;
+          const float t = trans_row[x];
+          if (t != 0) {
+            for (int c = 0; c < channels; ++c) {
+              const double sum = colour_row[std::size_t(x) + plane_size * std::size_t(c)];
+              const float v = static_cast<float>(a > 1 ? sum / a : sum);
+              out(x, y, c) = t == 1 ? v : out(x, y, c) + t * v;
+            }
+            trans_row[x] = a >= 1 ? 0.f : static_cast<float>(t * (1.0 - a));
+          }
+          cover_row[x] = 0;
+          for (int c = 0; c < channels; ++c)
+            colour_row[std::size_t(x) + plane_size * std::size_t(c)] = 0;
+        }
+      }
+      if (thread == 0 && settings.progress)
+        settings.progress(0.99 * double(l + 1) / double(layers));
+    }
+    // Normalise by the accumulated coverage; copy the skipped tiles.
+    for (std::ptrdiff_t y = band0; y < band1; ++y)
+      for (std::ptrdiff_t x = 0; x < width; ++x) {
+        if (!tile_worked(x, y)) {
+          for (int c = 0; c < channels; ++c) out(x, y, c) = color(x, y, c);
+          continue;
+        }
+        const float covered = 1.f - trans(x, y);
+        if (covered < 1 && covered > 0)
+          for (int c = 0; c < channels; ++c) out(x, y, c) /= covered;
+      }
+  }
+  report.stages.push_back({"splat and composite", seconds_since(start)});
+  report.skipped_fraction = double(skipped) / double(width * height);
+  report.notes = std::to_string(layers) + " depth layers of 1 px CoC";
+  if (settings.progress) settings.progress(1.0);
+}
+
+}  // namespace dof_detail
+}  // namespace tridiff
