@@ -22,11 +22,7 @@ namespace {
 
 using testing_util::invalid_argument_of;
 
-Image random_image(std::ptrdiff_t w, std::ptrdiff_t h, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> unit(0, 1);
-  return testing_util::make_image(w, h, 1, [&](auto, auto, int) { return unit(rng); });
-}
+using testing_util::random_image;
 
 std::ptrdiff_t clamp_to(std::ptrdiff_t i, std::ptrdiff_t n) {
   return i < 0 ? 0 : (i >= n ? n - 1 : i);

@@ -30,11 +30,7 @@ constexpr Border kBorders[] = {Border::replicate, Border::mirror, Border::zero,
 
 // ---- helpers ----------------------------------------------------------------------------
 
-Image random_image(std::ptrdiff_t w, std::ptrdiff_t h, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> value(0.f, 1.f);
-  return testing_util::make_image(w, h, 1, [&](auto, auto, int) { return value(rng); });
-}
+using testing_util::random_image;
 
 // A kernel of `size` random positive weights summing to 1: asymmetric, so that a flipped
 // kernel or a swapped axis shows.

@@ -87,11 +87,7 @@ double max_difference(ConstPlane a, const DoublePlane& b) {
   return worst;
 }
 
-Image random_image(std::ptrdiff_t w, std::ptrdiff_t h, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> value(0.f, 1.f);
-  return testing_util::make_image(w, h, 1, [&](auto, auto, int) { return value(rng); });
-}
+using testing_util::random_image;
 
 Image impulse_image(std::ptrdiff_t w, std::ptrdiff_t h, std::ptrdiff_t x, std::ptrdiff_t y) {
   Image image(w, h, 1);

@@ -18,12 +18,7 @@ namespace {
 using testing_util::contains;
 using testing_util::invalid_argument_of;
 using testing_util::make_image;
-
-Image random_image(std::ptrdiff_t w, std::ptrdiff_t h, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> unit(0, 1);
-  return make_image(w, h, 1, [&](auto, auto, int) { return unit(rng); });
-}
+using testing_util::random_image;
 
 TEST(BlurBorder, IndexRules) {
   // replicate: clamp; zero: -1; periodic: wrap; mirror: d c b a | a b c d.

@@ -26,22 +26,6 @@ using namespace tridiff::testing_util;
 
 const DofMethod& scatter() { return find_dof_method("scatter"); }
 
-Image random_image(std::ptrdiff_t width, std::ptrdiff_t height, int channels, float low, float high,
-                   unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> dist(low, high);
-  return make_image(width, height, channels, [&](auto, auto, int) { return dist(rng); });
-}
-
-Image make_coc(std::ptrdiff_t width, std::ptrdiff_t height,
-               const std::function<float(std::ptrdiff_t, std::ptrdiff_t)>& value) {
-  return make_image(width, height, 1, [&](auto x, auto y, int) { return value(x, y); });
-}
-
-bool same_bits(float a, float b) {
-  return std::bit_cast<std::uint32_t>(a) == std::bit_cast<std::uint32_t>(b);
-}
-
 Image run(const Image& color, const Image& coc, const DofSettings& settings = {}) {
   Image out;
   DofReport report;

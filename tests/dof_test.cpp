@@ -28,24 +28,6 @@ using namespace tridiff::testing_util;
 
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
-// Uniform random values in [low, high), the same for every run.
-Image random_image(std::ptrdiff_t width, std::ptrdiff_t height, int channels, float low, float high,
-                   unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> dist(low, high);
-  return make_image(width, height, channels, [&](auto, auto, int) { return dist(rng); });
-}
-
-// A one-channel CoC map.
-Image make_coc(std::ptrdiff_t width, std::ptrdiff_t height,
-               const std::function<float(std::ptrdiff_t, std::ptrdiff_t)>& value) {
-  return make_image(width, height, 1, [&](auto x, auto y, int) { return value(x, y); });
-}
-
-bool same_bits(float a, float b) {
-  return std::bit_cast<std::uint32_t>(a) == std::bit_cast<std::uint32_t>(b);
-}
-
 struct Result {
   Image out;
   DofReport report;

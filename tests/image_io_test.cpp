@@ -44,14 +44,6 @@ std::string message_of(const std::function<void()>& action) {
   return {};
 }
 
-// Uniform random values in [low, high), the same for every run.
-Image random_image(std::ptrdiff_t width, std::ptrdiff_t height, int channels, float low,
-                   float high, unsigned seed) {
-  std::mt19937 random(seed);
-  std::uniform_real_distribution<float> uniform(low, high);
-  return make_image(width, height, channels, [&](auto, auto, int) { return uniform(random); });
-}
-
 // Writes interleaved `pixels` (of buffer type `buffer`) straight through OpenImageIO, so that
 // reading is tested against files tridiff did not write.
 void write_with_oiio(const std::string& path, int width, int height,

@@ -5,7 +5,10 @@
 
 #include <cstddef>
 #include <exception>
+#include <bit>
+#include <cstdint>
 #include <functional>
+#include <random>
 #include <string>
 
 #include "tridiff/image/image.hpp"
@@ -43,6 +46,28 @@ inline Image make_image(std::ptrdiff_t width, std::ptrdiff_t height, int channel
     for (std::ptrdiff_t y = 0; y < height; ++y)
       for (std::ptrdiff_t x = 0; x < width; ++x) image(x, y, c) = value(x, y, c);
   return image;
+}
+
+// Uniform random values in [low, high), the same for every run with the same seed.
+inline Image random_image(std::ptrdiff_t width, std::ptrdiff_t height, int channels, float low,
+                          float high, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> uniform(low, high);
+  return make_image(width, height, channels, [&](auto, auto, int) { return uniform(rng); });
+}
+// One channel of uniform values in [0, 1).
+inline Image random_image(std::ptrdiff_t width, std::ptrdiff_t height, unsigned seed) {
+  return random_image(width, height, 1, 0.f, 1.f, seed);
+}
+
+// A one-channel CoC map.
+inline Image make_coc(std::ptrdiff_t width, std::ptrdiff_t height,
+                      const std::function<float(std::ptrdiff_t, std::ptrdiff_t)>& value) {
+  return make_image(width, height, 1, [&](auto x, auto y, int) { return value(x, y); });
+}
+
+inline bool same_bits(float a, float b) {
+  return std::bit_cast<std::uint32_t>(a) == std::bit_cast<std::uint32_t>(b);
 }
 
 }  // namespace tridiff::testing_util
