@@ -253,8 +253,9 @@ def plot_effective_sigma(table):
             ax.plot(*zip(*seed), "x", color=colors[m])
     ax.axhline(1, color="black", lw=1)
     ax.set(xscale="log", xlabel="sigma asked for", ylabel="effective sigma / sigma",
-           title="Effective sigma (x: seed 001 tables)")
-    ax.legend(fontsize=7)
+           title="Effective sigma" + (" (x: seed 001 tables)" if any(
+               r.get("seed001_sigma") is not None for r in rows) else ""))
+    ax.legend(fontsize=7, ncol=2)
     fig.tight_layout()
     return fig
 

@@ -32,7 +32,7 @@ start=$SECONDS
 bash scripts/deps.sh notebooks
 cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build "$build" -j"${TRIDIFF_JOBS:-$(nproc)}" --target tridiff tridiff_bench_blur \
-  tridiff_bench_solvers tridiff_bench_dof tridiff_stability_table
+  tridiff_bench_solvers tridiff_bench_dof tridiff_stability_table tridiff_blur_effective_sigma
 
 if ((full)); then
   results=results
@@ -58,6 +58,12 @@ results="$(cd "$results" && pwd)"
 if ((!full)) || [ ! -f "$results/stability.json" ]; then
   echo "tridiff: stability table -> $results/stability.json"
   "$build/bench/tridiff_stability_table" --out "$results/stability.json" 2>"$results/stability.txt"
+fi
+
+if ((!full)) || [ ! -f "$results/blur_effective_sigma.json" ]; then
+  echo "tridiff: effective sigma of every blur method -> $results/blur_effective_sigma.json"
+  "$build/tools/tridiff_blur_effective_sigma" --out "$results/blur_effective_sigma.json" \
+    --sigmas 2,4,8 2>"$results/blur_effective_sigma.txt"
 fi
 
 # The image grid: the built-in scene, small, through every registered DOF method (with the
