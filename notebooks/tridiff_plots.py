@@ -441,22 +441,46 @@ def plot_method_times(rows):
     return fig
 
 
+def plot_dof_error_vs_time(rows, size="1024x1024"):
+    """RMSE against the scatter reference (linear RGB, the 1024^2 scene) against time, per
+    thread count; the reference itself is left out (its error is 0)."""
+    sel = [r for r in rows if r["kind"] == "method" and r["size"] == size
+           and "rmse_vs_scatter" in r and r["method"] != "scatter"]
+    threads = sorted({r["threads"] for r in sel})
+    colors = method_colors({r["method"] for r in sel})
+    fig, axes = plt.subplots(1, len(threads), figsize=(4.5 * len(threads), 3.6), squeeze=False)
+    for ax, t in zip(axes[0], threads):
+        for r in sel:
+            if r["threads"] != t:
+                continue
+            ax.plot(r["ms"], r["rmse_vs_scatter"], "o", color=colors[r["method"]])
+            ax.annotate(r["method"], (r["ms"], r["rmse_vs_scatter"]), fontsize=7,
+                        xytext=(3, 3), textcoords="offset points")
+        ax.set(xscale="log", yscale="log", xlabel=f"time per frame (ms), {size}",
+               ylabel="RMSE against scatter (linear RGB)", title=f"{t} thread(s)")
+    fig.suptitle("Depth of field: error against time, built-in scene")
+    fig.tight_layout()
+    return fig
+
+
 def read_png(path):
     return plt.imread(str(path))[..., :3]
 
 
 def plot_image_grid(folder, columns=4):
     """Input, CoC and each method's output (from `tridiff dof`), then each method's absolute
-    difference to adi (x4)."""
+    difference (x4) to the scatter reference (to adi when there is no reference)."""
     reports = {json.loads(p.read_text())["method"]: p for p in sorted(folder.glob("*.json"))}
-    methods = sorted(reports, key=lambda m: (m != "adi", m))
+    reference = "scatter" if "scatter" in reports else "adi"
+    methods = sorted(reports, key=lambda m: (m != reference, m))
     images = {m: read_png(folder / f"{m}.png") for m in methods}
     panels = [("input", read_png(folder / "input.png")),
               ("CoC (red far, blue near)", read_png(folder / "coc.png"))]
     panels += [(m, images[m]) for m in methods]
-    if "adi" in images:
-        panels += [(f"|{m} - adi| x4", np.clip(4 * np.abs(images[m] - images["adi"]), 0, 1))
-                   for m in methods if m != "adi"]
+    if reference in images:
+        panels += [(f"|{m} - {reference}| x4",
+                    np.clip(4 * np.abs(images[m] - images[reference]), 0, 1))
+                   for m in methods if m != reference]
     rows = -(-len(panels) // columns)
     fig, axes = plt.subplots(rows, columns, figsize=(2.0 * columns, 1.3 * rows), squeeze=False)
     for ax in axes.flat:
