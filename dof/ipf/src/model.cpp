@@ -22,37 +22,22 @@ struct Cell {
   bool saturated = false;
 };
 
-// A mask row of n execution units' pipe registers: a value enters at the right (j = n - 1) and
-// leaves at the left n clocks later.
-class MaskRow {
+// A shift register of `length` stages, as a ring with a moving head: a value shifted in leaves
+// `length` clocks later (at once when the length is 0). A mask row is one of n execution units'
+// registers (at(j), j = n - 1 the newest); a pipe is the rest of a line between two mask rows.
+class ShiftRegister {
  public:
-  explicit MaskRow(int units) : cells_(std::size_t(units)) {}
+  explicit ShiftRegister(std::ptrdiff_t length) : cells_(std::size_t(length)) {}
+  std::ptrdiff_t length() const { return std::ptrdiff_t(cells_.size()); }
   Cell& at(int j) {
     std::size_t index = head_ + std::size_t(j);  // no division: this is the inner loop
     if (index >= cells_.size()) index -= cells_.size();
     return cells_[index];
   }
-  Cell shift_in(Cell&& newest) {
+  Cell shift(Cell&& newest) {
+    if (cells_.empty()) return std::move(newest);
     Cell leaving = std::move(cells_[head_]);
     cells_[head_] = std::move(newest);
-    if (++head_ == cells_.size()) head_ = 0;
-    return leaving;
-  }
-
- private:
-  std::vector<Cell> cells_;
-  std::size_t head_ = 0;
-};
-
-// The rest of a pipe after its mask row: `length` connected stages.
-class DelayLine {
- public:
-  explicit DelayLine(std::ptrdiff_t length) : cells_(std::size_t(length)) {}
-  std::ptrdiff_t length() const { return std::ptrdiff_t(cells_.size()); }
-  Cell pass(Cell&& value) {
-    if (cells_.empty()) return std::move(value);
-    Cell leaving = std::move(cells_[head_]);
-    cells_[head_] = std::move(value);
     if (++head_ == cells_.size()) head_ = 0;
     return leaving;
   }
@@ -82,8 +67,8 @@ PartCounts run_part(const FramePlan& plan, const Part& part, const Program& prog
   const int n = plan.mask, h = n / 2;
   const std::ptrdiff_t line = plan.line_length(part);
   const ScanMap map{plan.columns};
-  std::vector<MaskRow> rows(std::size_t(n), MaskRow{n});  // k = 0: newest line (bottom)
-  std::vector<DelayLine> pipes;                           // between row k and row k + 1
+  std::vector<ShiftRegister> rows(std::size_t(n), ShiftRegister{n});  // k = 0: newest line (bottom)
+  std::vector<ShiftRegister> pipes;                           // between row k and row k + 1
   for (int k = 0; k + 1 < n; ++k) pipes.emplace_back(line - n);
 
   PartCounts counts;
@@ -100,9 +85,9 @@ PartCounts run_part(const FramePlan& plan, const Part& part, const Program& prog
     }
     // Shift: through each mask row, then its pipe, into the row above.
     for (int k = 0; k < n; ++k) {
-      Cell leaving = rows[std::size_t(k)].shift_in(std::move(incoming));
+      Cell leaving = rows[std::size_t(k)].shift(std::move(incoming));
       if (k + 1 < n) {
-        incoming = pipes[std::size_t(k)].pass(std::move(leaving));
+        incoming = pipes[std::size_t(k)].shift(std::move(leaving));
         counts.shifts += pipes[std::size_t(k)].length();
       }
     }
