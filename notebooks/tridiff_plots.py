@@ -260,6 +260,27 @@ def plot_effective_sigma(table):
     return fig
 
 
+def plot_pyramid_levels(table):
+    """table["levels"]: {filter, levels, effective_sigma, seed001_sigma}: the effective sigma of
+    each pyramid level measured here (dots) against seed 001's Tables A.1-A.3 (crosses)."""
+    fig, ax = plt.subplots(figsize=(5.5, 4))
+    rows = table.get("levels", [])
+    colors = method_colors({r["filter"] for r in rows})
+    for f in sorted(colors):
+        pts = sorted((r["levels"], r["effective_sigma"], r["seed001_sigma"])
+                     for r in rows if r["filter"] == f)
+        ax.plot([p[0] for p in pts], [p[1] for p in pts], "o-", color=colors[f],
+                label=f"{f} (here)")
+        ax.plot([p[0] for p in pts], [p[2] for p in pts], "x", color=colors[f], ms=9,
+                label=f"{f} (seed 001)")
+    ax.set(yscale="log", xlabel="pyramid levels", ylabel="effective sigma (px)",
+           title="Pyramid levels: effective sigma against seed 001 Tables A.1-A.3")
+    ax.set_xticks(sorted({r["levels"] for r in rows}))
+    ax.legend(fontsize=7, ncol=2)
+    fig.tight_layout()
+    return fig
+
+
 # ---------------------------------------------------------------------------------------------
 # Solvers (bench_solvers.cpp): BM_solvers_<method>/<scalar>/<form>/<layout>:<systems>x<n>/threads:<t>
 

@@ -1,7 +1,9 @@
 // The effective sigma of every registered blur method (seed 001 §4.1.2): for each sigma asked
 // for, the sigma of the exact Gaussian nearest to the method's output over the quality test
-// patterns. Writes JSON for notebooks/blur.ipynb:
-//   {"rows": [{"method": ..., "sigma": ..., "effective_sigma": ..., "max_error": ...}, ...]}
+// patterns; and the effective sigma of every pyramid level beside seed 001's Tables A.1-A.3.
+// Writes JSON for notebooks/blur.ipynb:
+//   {"rows": [{"method": ..., "sigma": ..., "effective_sigma": ..., "max_error": ...}, ...],
+//    "levels": [{"filter": ..., "levels": L, "effective_sigma": ..., "seed001_sigma": ...}, ...]}
 //
 //   tridiff_blur_effective_sigma [--out FILE] [--sigmas 2,4,8]
 #include <cmath>
@@ -14,6 +16,7 @@
 #include <vector>
 
 #include "tridiff/blur/blur.hpp"
+#include "tridiff/blur/pyramid.hpp"
 #include "tridiff/blur/quality.hpp"
 
 namespace {
@@ -56,6 +59,34 @@ std::string row_json(const BlurMethod& method, double sigma) {
   return line;
 }
 
+// Seed 001 appendix A, row "D mean" (levels 1-5), as tests/blur_pyramid_test.cpp asserts them.
+struct SeedTable {
+  PyramidFilter filter;
+  double sigma[5];
+};
+constexpr SeedTable kSeedTables[] = {
+    {PyramidFilter::quasi, {1.5, 3.004808, 6.235577, 12.668269, 25.466346}},   // Table A.1
+    {PyramidFilter::box2, {1.139423, 2.24519, 4.51442, 9.34134, 18.71153}},    // Table A.2
+    {PyramidFilter::box4, {1.504808, 3.25, 6.533654, 13.408654, 26.947115}},  // Table A.3
+};
+
+std::string level_json(const SeedTable& seed, int levels) {
+  const double guess = pyramid_sigma(seed.filter, levels);
+  const std::ptrdiff_t size = std::max<std::ptrdiff_t>(96, static_cast<std::ptrdiff_t>(8 * guess));
+  const std::vector<TestPattern> patterns = quality_test_set(size);
+  const PlaneBlur run = [&](ConstPlane in, Plane out) {
+    pyramid_blur(in, out, seed.filter, levels);
+  };
+  const double effective = effective_sigma(run, patterns, 0.8 * guess, 1.25 * guess);
+  char line[256];
+  std::snprintf(line, sizeof line,
+                "{\"filter\": \"%s\", \"levels\": %d, \"effective_sigma\": %.6g, "
+                "\"seed001_sigma\": %.6g}",
+                std::string(pyramid_filter_name(seed.filter)).c_str(), levels, effective,
+                seed.sigma[levels - 1]);
+  return line;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -78,11 +109,20 @@ int main(int argc, char** argv) {
           rows.push_back(row_json(method, sigma));
           std::cerr << rows.back() << "\n";
         }
+    std::vector<std::string> levels;
+    for (const SeedTable& seed : kSeedTables)
+      for (int l = 1; l <= 5; ++l) {
+        levels.push_back(level_json(seed, l));
+        std::cerr << levels.back() << "\n";
+      }
+    auto list = [](const std::vector<std::string>& items) {
+      std::string text;
+      for (std::size_t i = 0; i < items.size(); ++i)
+        text += "  " + items[i] + (i + 1 < items.size() ? ",\n" : "\n");
+      return text;
+    };
     std::ostringstream json;
-    json << "{\"rows\": [\n";
-    for (std::size_t i = 0; i < rows.size(); ++i)
-      json << "  " << rows[i] << (i + 1 < rows.size() ? ",\n" : "\n");
-    json << "]}\n";
+    json << "{\"rows\": [\n" << list(rows) << "],\n\"levels\": [\n" << list(levels) << "]}\n";
     if (out_path.empty()) {
       std::cout << json.str();
     } else {
