@@ -26,6 +26,7 @@ TileInfo classify(ConstPlane coc, const Rect& area, float in_focus) {
   TileInfo info;
   info.min_coc = info.max_coc = coc(area.x, area.y);
   bool near = false, far = false;
+  std::ptrdiff_t x0 = area.x + area.width, x1 = -1, y0 = area.y + area.height, y1 = -1;
   for (std::ptrdiff_t y = area.y; y < area.y + area.height; ++y) {
     const float* row = coc.row(y);
     for (std::ptrdiff_t x = area.x; x < area.x + area.width; ++x) {
@@ -33,12 +34,17 @@ TileInfo classify(ConstPlane coc, const Rect& area, float in_focus) {
       info.min_coc = std::min(info.min_coc, c);
       info.max_coc = std::max(info.max_coc, c);
       if (std::abs(c) < in_focus) continue;
+      x0 = std::min(x0, x);
+      x1 = std::max(x1, x);
+      y0 = std::min(y0, y);
+      y1 = std::max(y1, y);
       info.max_radius = std::max(info.max_radius, std::abs(c) / 2);
       near = near || c < 0;
       far = far || c > 0;
     }
   }
   info.kind = static_cast<TileKind>((far ? 1 : 0) | (near ? 2 : 0));
+  if (x1 >= 0) info.blurred = {x0, y0, x1 - x0 + 1, y1 - y0 + 1};
   return info;
 }
 
@@ -64,7 +70,7 @@ TileMap::TileMap(ConstPlane coc, float in_focus_coc_px, std::ptrdiff_t tile,
       info_[std::size_t(ty * tiles_x_ + tx)] = classify(coc, rect(tx, ty), in_focus_);
 
   // 2. Reach: every tile with a disc stamps its largest radius onto the tiles that its pixels'
-  // discs can overlap. Clamping the reach at the frame edge also covers a mirror border (the
+  // discs can overlap (its largest extent around the box of its out-of-focus pixels). Clamping the reach at the frame edge also covers a mirror border (the
   // folded part of a disc lands nearer its centre than the unfolded part would).
   // Serial: the stamps overlap, and there are few tiles (8160 at 3840 x 2160).
   for (std::ptrdiff_t ty = 0; ty < tiles_y_; ++ty)
@@ -74,7 +80,7 @@ TileMap::TileMap(ConstPlane coc, float in_focus_coc_px, std::ptrdiff_t tile,
       const bool near = source.kind == TileKind::near || source.kind == TileKind::mixed;
       const std::ptrdiff_t extent =
           static_cast<std::ptrdiff_t>(std::ceil(source.max_radius + 0.5f)) + margin_px;
-      const Rect area = rect(tx, ty);
+      const Rect& area = source.blurred;
       const std::ptrdiff_t x0 = std::max<std::ptrdiff_t>(area.x - extent, 0) / tile_,
                            x1 = std::min(area.x + area.width - 1 + extent, width_ - 1) / tile_,
                            y0 = std::max<std::ptrdiff_t>(area.y - extent, 0) / tile_,

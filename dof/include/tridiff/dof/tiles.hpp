@@ -25,6 +25,7 @@ enum class TileKind : unsigned char {
 struct TileInfo {
   float min_coc = 0, max_coc = 0;  // signed range over the tile's pixels
   float max_radius = 0;            // max |c| / 2 over the tile's out-of-focus pixels (0: none)
+  Rect blurred;                    // the bounding box of those pixels (empty: none)
   // The largest radius of any out-of-focus pixel in the frame whose disc (radius r around it,
   // rounded out to whole pixels) overlaps this tile; this tile's own pixels included. 0: no disc
   // reaches the tile, so every method's output there is its input.
