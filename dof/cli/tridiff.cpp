@@ -27,7 +27,9 @@ constexpr const char* kUsageHead = R"(usage: tridiff dof [options]      depth of
 
 )";
 constexpr const char* kDofUsage = R"(method
-  --method NAME             adi (default); every method: `tridiff methods`
+  --method NAME             adi (default); every method: `tridiff methods`; `auto` picks the
+                            cheapest whose measured error meets --psnr-budget
+  --psnr-budget DB          auto: the least PSNR against the scatter reference (default 30)
   --layers                  blur the near field as its own layer (removes the blocking artifact)
   --in-focus PX             |CoC| below this is sharp and skipped (default 1)
   --no-skip                 process in-focus parts too (reference; same result, slower)
@@ -40,8 +42,8 @@ output
 )";
 
 const std::vector<std::string> kDofFlags = {"layers", "no-skip", "help"};
-const std::vector<std::string> kDofOptions = {"method", "in-focus", "output", "coc-output",
-                                              "input-output", "report"};
+const std::vector<std::string> kDofOptions = {"method", "in-focus", "psnr-budget", "output",
+                                              "coc-output", "input-output", "report"};
 
 void print_dof_usage() {
   std::fputs(kUsageHead, stdout);
@@ -117,6 +119,7 @@ int run_dof(const cli::Arguments& args) {
   settings.layers = args.flag("layers");
   settings.skip_in_focus = !args.flag("no-skip");
   settings.in_focus_coc_px = args.number("in-focus", 1.f);
+  settings.error_budget_psnr = args.number("psnr-budget", 30.f);
   settings.progress = progress_bar();
   DofReport report;
   Image result;
@@ -134,7 +137,9 @@ int run_dof(const cli::Arguments& args) {
 
   std::ostringstream text, json;
   text << "tridiff dof: " << source << "\n"
-       << "  method   " << method.name << (report.layered ? " (layered)" : "") << "\n"
+       << "  method   " << method.name
+       << (report.chosen_method.empty() ? "" : " -> " + report.chosen_method)
+       << (report.layered ? " (layered)" : "") << "\n"
        << "  coc      " << frame.coc_model << "\n"
        << "  skipped  " << 100.0 * report.skipped_fraction << " % of the per-pixel work\n";
   if (report.explicit_steps) text << "  steps    " << report.explicit_steps << " explicit steps\n";
@@ -142,10 +147,12 @@ int run_dof(const cli::Arguments& args) {
   for (const DofStage& stage : report.stages) text << stage.name << " " << stage.seconds * 1e3 << " ms, ";
   text << "write " << write_seconds * 1e3 << " ms, total " << seconds(start) * 1e3 << " ms\n"
        << "  wrote    " << output << ", " << coc_output << "\n";
+  if (!report.notes.empty()) text << "  notes    " << report.notes << "\n";
   std::fputs(text.str().c_str(), stdout);
 
   if (args.has("report")) {
     json << "{\n  \"source\": \"" << source << "\",\n  \"method\": \"" << method.name
+         << "\",\n  \"chosen_method\": \"" << report.chosen_method
          << "\",\n  \"layered\": " << (report.layered ? "true" : "false")
          << ",\n  \"coc_model\": \"" << frame.coc_model << "\",\n  \"skipped_fraction\": "
          << report.skipped_fraction << ",\n  \"explicit_steps\": " << report.explicit_steps

@@ -11,6 +11,7 @@ void run_adi(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
 void run_mpad(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
 void run_ipf(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
 void run_scatter(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
+void run_auto(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
 }  // namespace dof_detail
 
 namespace {
@@ -24,6 +25,8 @@ constexpr std::array kMethods{
               true, false, "O(pixels x min(max |CoC|, 16)^2)", dof_detail::run_ipf},
     DofMethod{"scatter", "the slow reference: area-normalised anti-aliased CoC discs, depth layers",
               true, false, "O(pixels x CoC^2)", dof_detail::run_scatter},
+    DofMethod{"auto", "the cheapest method whose measured error meets --psnr-budget (auto.hpp)",
+              false, false, "the chosen method's", dof_detail::run_auto},
 };
 
 }  // namespace

@@ -18,6 +18,7 @@ struct DofSettings {
   bool skip_in_focus = true;       // false: every pixel takes the full path (the reference)
   bool layers = false;             // blur the near field as its own layer (Kass et al. 2006)
   float in_focus_coc_px = 1.f;     // |CoC| below this (a sub-pixel blur) counts as sharp
+  double error_budget_psnr = 30;   // `auto`: the least PSNR (dB) against scatter to accept
   std::function<void(double)> progress;  // fraction done, 0..1; may be empty
 };
 
@@ -31,6 +32,7 @@ struct DofReport {
   double skipped_fraction = 0;  // of the per-pixel work of the diffusion passes
   int explicit_steps = 0;       // explicit methods: forward-Euler steps taken
   bool layered = false;         // whether the near field was blurred as its own layer
+  std::string chosen_method;    // `auto`: the method it ran
   std::string notes;
 };
 
