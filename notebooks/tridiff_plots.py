@@ -406,42 +406,53 @@ def plot_stability(table):
 
 
 # ---------------------------------------------------------------------------------------------
-# Depth of field (bench_dof.cpp): BM_dof_<method>/<W>x<H>/threads:<t>, BM_dof_adi_focus/<percent>/threads:<t>
+# Depth of field (bench_dof.cpp): BM_dof_<method>/<W>x<H>/threads:<t> (the procedural scene),
+# BM_dof_<method>/<scene>/<W>x<H>/threads:<t>, BM_dof_<method>_focus/<percent>/threads:<t>
 
 def dof_table(runs):
     rows = []
     for r in runs:
         head, rest = r.parts[0], r.parts[1:]
-        if head == "BM_dof_adi_focus":
-            rows.append(dict(kind="focus", method="adi", percent=int(rest[0]), size="2048x2048",
-                             threads=r.threads, ms=r.seconds * 1e3, **r.counters))
-        elif head.startswith("BM_dof_"):
-            rows.append(dict(kind="method", method=head.removeprefix("BM_dof_"), size=rest[0],
-                             threads=r.threads, ms=r.seconds * 1e3, **r.counters))
-        else:
+        if not head.startswith("BM_dof_"):
             raise ValueError(f"unexpected DOF benchmark {r.name}")
+        method = head.removeprefix("BM_dof_")
+        if method.endswith("_focus"):
+            rows.append(dict(kind="focus", method=method.removesuffix("_focus"),
+                             percent=int(rest[0]), size="2048x2048", threads=r.threads,
+                             ms=r.seconds * 1e3, **r.counters))
+        else:
+            scene, size = (rest[0], rest[1]) if len(rest) == 2 else ("procedural", rest[0])
+            rows.append(dict(kind="method", method=method, scene=scene, size=size,
+                             threads=r.threads, ms=r.seconds * 1e3, **r.counters))
     return rows
 
 
 def plot_focus_fraction(rows):
-    """ADI's cost against the out-of-focus fraction of the frame (in-focus tiles are skipped)."""
+    """Each method's cost against the out-of-focus fraction of the frame (in-focus tiles are
+    skipped), one line per method and thread count."""
     sel = [r for r in rows if r["kind"] == "focus"]
     fig, (ax, ax2) = plt.subplots(1, 2, figsize=(9, 3.6))
-    for t in sorted({r["threads"] for r in sel}):
-        pts = sorted((r["percent"], r["ms"], r["copy_ratio"], r["skipped"]) for r in sel if r["threads"] == t)
-        ax.plot([p[0] for p in pts], [p[1] for p in pts], "o-", label=f"{t} thread(s)")
-        ax2.plot([p[0] for p in pts], [p[2] for p in pts], "o-", label=f"{t} thread(s)")
-    ax.set(xlabel="out of focus (% of the frame)", ylabel="time (ms)", title="ADI, 2048x2048", ylim=(0, None))
-    ax2.set(xlabel="out of focus (% of the frame)", ylabel="time / copy time", title="in copies", ylim=(0, None))
-    ax.legend()
-    ax2.legend()
+    colors = method_colors({r["method"] for r in sel})
+    for m in sorted({r["method"] for r in sel}):
+        for t in sorted({r["threads"] for r in sel if r["method"] == m}):
+            pts = sorted((r["percent"], r["ms"], r["copy_ratio"]) for r in sel
+                         if r["threads"] == t and r["method"] == m)
+            label = f"{m}, {t} thread(s)"
+            ax.plot([p[0] for p in pts], [p[1] for p in pts], "o-", label=label, color=colors[m])
+            ax2.plot([p[0] for p in pts], [p[2] for p in pts], "o-", label=label, color=colors[m])
+    ax.set(xlabel="out of focus (% of the frame)", ylabel="time (ms)", title="2048x2048",
+           yscale="log")
+    ax2.set(xlabel="out of focus (% of the frame)", ylabel="time / copy time", title="in copies",
+            yscale="log")
+    ax.legend(fontsize=7)
     fig.tight_layout()
     return fig
 
 
 def plot_method_times(rows):
-    """Time per method and image size, one panel per thread count, the copy beside them."""
-    sel = [r for r in rows if r["kind"] == "method"]
+    """Time per method and image size on the procedural scene, one panel per thread count, the
+    copy beside them."""
+    sel = [r for r in rows if r["kind"] == "method" and r["scene"] == "procedural"]
     threads = sorted({r["threads"] for r in sel})
     methods = sorted({r["method"] for r in sel}, key=lambda m: (m != "copy", m))
     sizes = sort_sizes(r["size"] for r in sel)
@@ -456,7 +467,7 @@ def plot_method_times(rows):
         ax.set_xticks(range(len(sizes)), sizes)
         ax.set(yscale="log", title=f"{t} thread(s)", xlabel="image size (RGB float)")
         ax.legend(fontsize=7)
-    axes[0][0].set_ylabel("time (ms), CoC included")
+    axes[0][0].set_ylabel("time (ms), CoC given")
     fig.suptitle("Depth of field: time per method and size, built-in scene")
     fig.tight_layout()
     return fig
@@ -466,7 +477,7 @@ def plot_dof_error_vs_time(rows, size="1024x1024"):
     """RMSE against the scatter reference (linear RGB, the 1024^2 scene) against time, per
     thread count; the reference itself is left out (its error is 0)."""
     sel = [r for r in rows if r["kind"] == "method" and r["size"] == size
-           and "rmse_vs_scatter" in r and r["method"] != "scatter"]
+           and r["scene"] == "procedural" and "rmse_vs_scatter" in r and r["method"] != "scatter"]
     threads = sorted({r["threads"] for r in sel})
     colors = method_colors({r["method"] for r in sel})
     fig, axes = plt.subplots(1, len(threads), figsize=(4.5 * len(threads), 3.6), squeeze=False)
