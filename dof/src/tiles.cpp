@@ -78,8 +78,9 @@ TileMap::TileMap(ConstPlane coc, float in_focus_coc_px, std::ptrdiff_t tile,
       const TileInfo& source = at(tx, ty);
       if (source.max_radius <= 0) continue;
       const bool near = source.kind == TileKind::near || source.kind == TileKind::mixed;
-      const std::ptrdiff_t extent =
-          static_cast<std::ptrdiff_t>(std::ceil(source.max_radius + 0.5f)) + margin_px;
+      // A disc wider than the frame reaches all of it: cap before converting (|CoC| may be huge).
+      const float radius = std::min(source.max_radius, float(width_ + height_));
+      const std::ptrdiff_t extent = static_cast<std::ptrdiff_t>(std::ceil(radius + 0.5f)) + margin_px;
       const Rect& area = source.blurred;
       const std::ptrdiff_t x0 = std::max<std::ptrdiff_t>(area.x - extent, 0) / tile_,
                            x1 = std::min(area.x + area.width - 1 + extent, width_ - 1) / tile_,
