@@ -12,6 +12,7 @@ void run_mpad(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
 void run_ipf(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
 void run_scatter(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
 void run_auto(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
+void run_poisson(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
 }  // namespace dof_detail
 
 namespace {
@@ -25,6 +26,8 @@ constexpr std::array kMethods{
               true, false, "O(pixels x min(max |CoC|, 16)^2)", dof_detail::run_ipf},
     DofMethod{"scatter", "the slow reference: area-normalised anti-aliased CoC discs, depth layers",
               true, false, "O(pixels x CoC^2)", dof_detail::run_scatter},
+    DofMethod{"poisson", "Poisson-disc gather by the own CoC, blurred levels (seed 000 §5.3.3)",
+              false, true, "O(pixels x 13..49 taps) + O(pixels) levels", dof_detail::run_poisson},
     DofMethod{"auto", "the cheapest method whose measured error meets --psnr-budget (auto.hpp)",
               false, false, "the chosen method's", dof_detail::run_auto},
 };
