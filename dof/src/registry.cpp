@@ -11,6 +11,7 @@ void run_adi(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
 void run_mpad(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
 void run_ipf(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
 void run_scatter(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
+void run_pyramid_layers(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
 }  // namespace dof_detail
 
 namespace {
@@ -24,6 +25,9 @@ constexpr std::array kMethods{
               true, false, "O(pixels x min(max |CoC|, 16)^2)", dof_detail::run_ipf},
     DofMethod{"scatter", "the slow reference: area-normalised anti-aliased CoC discs, depth layers",
               true, false, "O(pixels x CoC^2)", dof_detail::run_scatter},
+    DofMethod{"pyramid-layers", "CoC depth layers, quasi-convolution pyramids, over (seed 001 4.5)",
+              true, true, "O(pixels x layers), layers ~ log1.5(max |CoC|)",
+              dof_detail::run_pyramid_layers},
 };
 
 }  // namespace
