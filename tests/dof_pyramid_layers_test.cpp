@@ -323,18 +323,22 @@ TEST(PyramidLayers, SkipMatchesNoSkipBitForBit) {
 // near block over a black background that is just out of focus (CoC 1, so every tile is reached)
 // against a sharp one, at the pixels that the sharp case leaves exactly black.
 TEST(PyramidLayers, TileReachHoldsTheLayerKernels) {
-  const std::ptrdiff_t size = 256;
-  // Block edges at x = 85, y = 117, near a tile edge.
-  auto block = [](auto x, auto y) { return x >= 85 && x < 139 && y >= 117 && y < 160; };
+  const std::ptrdiff_t size = 480;
+  // The block ends on tile edges, where the reach is tightest.
+  auto block = [](auto x, auto y) { return x >= 192 && x < 256 && y >= 192 && y < 256; };
   const Image color =
       make_image(size, size, 1, [&](auto x, auto y, int) { return block(x, y) ? 1.f : 0.f; });
-  // -13: a block split between the layers 12 and 24 (the largest CoC, -24, at one pixel far
-  // away): the 24 layer's wider kernel reaches farther than the block's own discs.
-  for (float d : {-3.f, -6.f, -8.f, -12.f, -24.f, -13.f}) {
+  // With `largest` at one pixel in a corner, the block's CoC d falls between two layers and
+  // feeds the upper one, whose kernel reaches farther than the block's own discs.
+  struct Case {
+    float d, largest;
+  };
+  for (const Case k : {Case{-3, 0}, Case{-8, 0}, Case{-24, 0}, Case{-60, 0}, Case{-13, -24},
+                       Case{-50, -98}, Case{-60, -119}}) {
     auto coc_of = [&](float background) {
       return make_coc(size, size, [&](auto x, auto y) {
-        if (d == -13.f && x == 10 && y == 240) return -24.f;
-        return block(x, y) ? d : background;
+        if (k.largest != 0 && x == 0 && y == 0) return k.largest;
+        return block(x, y) ? k.d : background;
       });
     };
     const Image cut = run(color, coc_of(0.f)).out, whole = run(color, coc_of(1.f)).out;
@@ -342,14 +346,14 @@ TEST(PyramidLayers, TileReachHoldsTheLayerKernels) {
     std::ptrdiff_t black = 0;
     for (std::ptrdiff_t y = 0; y < size; ++y)
       for (std::ptrdiff_t x = 0; x < size; ++x)
-        if (cut(x, y, 0) == 0) {
+        if (cut(x, y, 0) == 0 && x + y > 200) {  // away from the corner pixel's own blur
           ++black;
           tail = std::max(tail, whole(x, y, 0));
         }
-    EXPECT_GT(black, size * size / 4) << "D " << d;
-    EXPECT_EQ(tail, 0.f) << "D " << d;
-    std::printf("[ measured ] D %g: largest value cut from the layer's tail %.2e\n", double(d),
-                double(tail));
+    EXPECT_GT(black, size * size / 8) << "D " << k.d;
+    EXPECT_EQ(tail, 0.f) << "D " << k.d << ", largest " << k.largest;
+    std::printf("[ measured ] D %g (largest %g): largest value cut from a layer's tail %.2e\n",
+                double(k.d), double(k.largest), double(tail));
   }
 }
 
