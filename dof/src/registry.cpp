@@ -13,6 +13,7 @@ void run_ipf(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
 void run_scatter(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
 void run_auto(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
 void run_poisson(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
+void run_pyramid_layers(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
 }  // namespace dof_detail
 
 namespace {
@@ -28,6 +29,9 @@ constexpr std::array kMethods{
               true, false, "O(pixels x CoC^2)", dof_detail::run_scatter},
     DofMethod{"poisson", "Poisson-disc gather by the own CoC, blurred levels (seed 000 §5.3.3)",
               false, true, "O(pixels x 13..49 taps) + O(pixels) levels", dof_detail::run_poisson},
+    DofMethod{"pyramid-layers", "CoC depth layers, quasi-convolution pyramids, over (seed 001 4.5)",
+              true, true, "O(pixels x layers), layers ~ log1.5(max |CoC|)",
+              dof_detail::run_pyramid_layers},
     DofMethod{"auto", "the cheapest method whose measured error meets --psnr-budget (auto.hpp)",
               false, false, "the chosen method's", dof_detail::run_auto},
 };
