@@ -11,6 +11,8 @@ void run_adi(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
 void run_mpad(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
 void run_ipf(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
 void run_scatter(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
+void run_sat(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
+void run_sat_layers(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
 }  // namespace dof_detail
 
 namespace {
@@ -24,6 +26,10 @@ constexpr std::array kMethods{
               true, false, "O(pixels x min(max |CoC|, 16)^2)", dof_detail::run_ipf},
     DofMethod{"scatter", "the slow reference: area-normalised anti-aliased CoC discs, depth layers",
               true, false, "O(pixels x CoC^2)", dof_detail::run_scatter},
+    DofMethod{"sat", "three boxes from a half-resolution summed-area table (seed 003)", false, true,
+              "O(pixels), independent of the CoC", dof_detail::run_sat},
+    DofMethod{"sat-layers", "near over far summed-area tables normalised by coverage (seed 003)",
+              true, true, "O(pixels), independent of the CoC", dof_detail::run_sat_layers},
 };
 
 }  // namespace
