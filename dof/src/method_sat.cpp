@@ -21,26 +21,29 @@
 // frame): 16 entries a box. The border is replicate (what the table gives), not the mirror of
 // `scatter`. The tables are the double SummedAreaTable: at half resolution 2 bytes a
 // full-resolution pixel a channel, one load an entry (the tiled float table costs five), and its
-// rounding, about 4 eps_double T_max / box area, is negligible at any frame size.
+// rounding, about 16 eps_double T_max / box area, is negligible at any frame size.
 //
 // `sat-layers` (the remedy seed 003 proposes under "Limitations" against leaking). Two sets of
-// tables, each premultiplied by a coverage α in an extra table: the far layer (c >= the sharp
-// threshold: α C, α) and the near layer (c <= -threshold: α C, α, α R). Sharp pixels are in
-// neither. Per pixel p:
-//  - base: a sharp p keeps its colour; otherwise the three-box mean of the far layer with p's
-//    own radius, normalised by the three-box mean of α (the coverage replaces the analytic area),
-//    so near and sharp colours do not leak into the background blur. Behind a near pixel the far
-//    layer is read with the near pixel's radius; if no far pixel is in reach there is no base.
-//  - foreground, only in tiles whose TileMap near reach is > 0: the near radius R_n is the mean R
-//    of the near pixels in the square of half-extent near_reach_radius about p (from the α R and
-//    α tables; at most that reach), then F = three-box mean of α C and A = three-box mean of α
-//    with R_n. For a uniform near CoC this is the scatter's near layer exactly (coverage and
-//    premultiplied colour of area-normalised splats are a box-filtered α and α C).
-//  - composite, near over far: out = F + (1 - A) base; without a base out = F / A (as `scatter`
-//    renormalises by the coverage).
+// tables, each premultiplied by a coverage α held in an extra table (seed 003: "use that total
+// value instead of the analytic area"): the far layer (c >= the sharp threshold) and the near
+// layer (c <= -threshold), each with planes α C, α and α R. Sharp pixels are in neither. Per p:
+//  - base: a sharp p is its own colour with coverage 1. Otherwise the far layer's three-box
+//    means with radius R_b: B = mean(α C) / mean(α), coverage a = min(mean(α), 1); near and
+//    sharp colours do not leak into B. For a far p, R_b is its own radius; behind a near p, the
+//    far pixels that would splat onto p are read with R_b = the mean far radius in the square of
+//    half-extent TileMap reach_radius about p (from the α R and α tables), so a far layer of
+//    small CoC does not show through a near object.
+//  - front, only in tiles whose TileMap near reach is > 0: the near radius R_n is the mean near
+//    radius in the square of half-extent near_reach_radius about p, then F = three-box mean of
+//    α C and A = three-box mean of α with R_n. For a uniform near CoC these are the scatter's
+//    near coverage and premultiplied colour exactly (a box-filtered α and α C, as area-normalised
+//    splats are).
+//  - composite, near over the base and renormalised by the union of the coverages, as `scatter`
+//    does: out = (F + (1 - A) a B) / (A + (1 - A) a); without a front, out = B.
 // Whether a box holds any coverage is decided exactly by replicate_box_sum over the whole
 // half-resolution cells it touches (α is a multiple of 1/4, so those sums are exact in double);
-// the fractional read alone would leave rounding residues instead of zero.
+// the fractional read alone would leave rounding residues instead of zero, so a mean coverage
+// below kMinCoverage counts as none.
 //
 // Validity: any finite CoC, any size (1 x 1 up), any channel count; the cost per pixel does not
 // depend on the CoC (O(pixels) for any blur). `sat` is a convex combination of the input
@@ -51,8 +54,10 @@
 // blur and a blurred near object does not spread over a sharp background (blurs_foreground
 // false); `sat-layers` removes both, but its near radius is a neighbourhood mean (wrong where near
 // CoCs vary quickly) and it bounds that mean by the per-tile near reach, which can show tile
-// edges in the near halo where near CoCs vary; (3) box kernels: square-ish bokeh, not discs;
-// (4) far pixels of different depths still mix (one far layer, not depth-sorted layers).
+// edges in the near halo where near CoCs vary (the far radius behind a near pixel likewise);
+// (3) box kernels: square-ish bokeh, not discs; (4) far pixels of different depths still mix
+// (one far layer, not depth-sorted layers); (5) HDR highlights next to a near edge in `sat`
+// bleed into it (the largest error against `scatter`, see tests/dof_sat_test.cpp).
 //
 // Skipping: TileMap with a margin of 2 px for the half-resolution cells (a box touches a cell up
 // to 1.5 px beyond its edge). A tile that nothing reaches holds only sharp pixels, whose output is
@@ -171,6 +176,20 @@ struct ThreeBoxes {
     return tridiff::any_coverage(alpha, xs[0], ys[0]);
   }
 };
+
+// The mean radius of a layer's pixels in the square of half-extent `reach` about pixel (x, y),
+// from its tables: [alpha] = α, [alpha + 1] = α R; clamped to [min_radius, reach]. False when
+// the square holds no coverage.
+bool layer_radius(const std::vector<SummedAreaTable>& layer, std::size_t alpha, std::ptrdiff_t x,
+                  std::ptrdiff_t y, double reach, double min_radius, double& radius) {
+  const AxisTaps xs = full_res_taps(x, reach, layer[alpha].width());
+  const AxisTaps ys = full_res_taps(y, reach, layer[alpha].height());
+  if (!any_coverage(layer[alpha], xs, ys)) return false;
+  const double weight = box_integral(layer[alpha], xs, ys);
+  if (!(weight / (reach * reach) > kMinCoverage)) return false;
+  radius = std::clamp(box_integral(layer[alpha + 1], xs, ys) / weight, min_radius, reach);
+  return true;
+}
 
 // One table per plane of `planes`.
 std::vector<SummedAreaTable> build_tables(const Image& planes, int team) {
@@ -296,10 +315,12 @@ void run_sat_layers(Image& out, const Image& color, ConstPlane coc, const DofSet
   auto start = Clock::now();
   std::vector<SummedAreaTable> far, near;
   if (has_far)
-    far = build_tables(half_resolution(width, height, channels + 1, common.team,
+    far = build_tables(half_resolution(width, height, channels + 2, common.team,
                                        [&](int k, std::ptrdiff_t x, std::ptrdiff_t y) {
-                                         if (!(coc(x, y) >= sharp_below)) return 0.f;
-                                         return k < channels ? color(x, y, k) : 1.f;
+                                         const float c = coc(x, y);
+                                         if (!(c >= sharp_below)) return 0.f;
+                                         if (k < channels) return color(x, y, k);
+                                         return k == channels ? 1.f : 0.5f * c;
                                        }),
                        common.team);
   if (has_near)
@@ -315,46 +336,50 @@ void run_sat_layers(Image& out, const Image& color, ConstPlane coc, const DofSet
 
   start = Clock::now();
   const std::ptrdiff_t cells_x = (width + 1) / 2, cells_y = (height + 1) / 2;
-  const std::size_t alpha = std::size_t(channels), alpha_radius = alpha + 1;
+  const std::size_t alpha = std::size_t(channels);
   for_each_worked_pixel(
       common.tiles, common.skip, common.team, out, color,
       [&](std::ptrdiff_t x, std::ptrdiff_t y, const TileInfo& tile) {
         const float c = coc(x, y);
         const double radius = 0.5 * std::fabs(double(c));
         const bool sharp = std::fabs(c) < sharp_below;
-        // The base: the pixel itself, or the far layer normalised by its coverage.
+        // The base: the pixel itself, or the far layer normalised by its coverage, read with
+        // the pixel's radius, or behind a near pixel with the radius of the far pixels around.
         ThreeBoxes back;
         double back_cover = 0;
         if (!sharp && !far.empty()) {
-          back = ThreeBoxes(x, y, radius, cells_x, cells_y);
-          if (back.any_coverage(far[alpha])) back_cover = back.mean(far[alpha]);
+          double back_radius = radius;
+          const bool found = c > 0 || layer_radius(far, alpha, x, y, tile.reach_radius,
+                                                   0.5 * double(sharp_below), back_radius);
+          if (found) {
+            back = ThreeBoxes(x, y, back_radius, cells_x, cells_y);
+            if (back.any_coverage(far[alpha])) back_cover = back.mean(far[alpha]);
+          }
         }
         const bool has_base = sharp || back_cover > kMinCoverage;
         // The near layer, in tiles that a near disc reaches.
         ThreeBoxes front;
         double front_cover = 0;
-        if (has_near && tile.near_reach_radius > 0) {
-          const double reach = tile.near_reach_radius;
-          const AxisTaps sx = full_res_taps(x, reach, cells_x);
-          const AxisTaps sy = full_res_taps(y, reach, cells_y);
-          const double weight =
-              any_coverage(near[alpha], sx, sy) ? box_integral(near[alpha], sx, sy) : 0.0;
-          if (weight / (reach * reach) > kMinCoverage) {
-            const double near_radius = std::clamp(box_integral(near[alpha_radius], sx, sy) / weight,
-                                                  0.5 * double(sharp_below), reach);
-            front = ThreeBoxes(x, y, near_radius, cells_x, cells_y);
-            if (front.any_coverage(near[alpha]))
-              front_cover = std::min(front.mean(near[alpha]), 1.0);
-          }
+        double front_radius = 0;
+        if (has_near && tile.near_reach_radius > 0 &&
+            layer_radius(near, alpha, x, y, tile.near_reach_radius, 0.5 * double(sharp_below),
+                         front_radius)) {
+          front = ThreeBoxes(x, y, front_radius, cells_x, cells_y);
+          if (front.any_coverage(near[alpha]))
+            front_cover = std::min(front.mean(near[alpha]), 1.0);
         }
         const bool has_front = front_cover > kMinCoverage;
+        // Near over the base with the coverages as alphas, renormalised by their union (what
+        // `scatter` does): continuous where the far coverage behind a near edge fades out.
+        const double base_alpha = sharp ? 1.0 : std::min(back_cover, 1.0);
+        const double total = front_cover + (1 - front_cover) * base_alpha;
         for (int ch = 0; ch < channels; ++ch) {
           const std::size_t k = std::size_t(ch);
           double v = sharp ? double(color(x, y, ch)) : 0.0;
           if (!sharp && has_base) v = back.mean(far[k]) / back_cover;
           if (has_front)
-            v = has_base ? front.mean(near[k]) + (1 - front_cover) * v
-                         : front.mean(near[k]) / front_cover;
+            v = (front.mean(near[k]) + (1 - front_cover) * (has_base ? base_alpha * v : 0.0)) /
+                total;
           // Neither layer in reach happens only through rounding: keep the input.
           out(x, y, ch) = has_base || has_front ? static_cast<float>(v) : color(x, y, ch);
         }
