@@ -3,7 +3,8 @@
 // 003 computed here by brute force in double over the half-resolution image (any size, boxes far
 // larger than the frame, 4096-wide rows), in-focus identity bit for bit, constant colour under
 // any CoC map, outputs within the input's range, no leak of sharp colours into the background
-// (sat-layers), the near layer spreading over a sharp background, thread-count independence,
+// (sat-layers), the near layer spreading over a sharp background and hiding a small far blur
+// behind it, thread-count independence,
 // skipping, and the error against the `scatter` reference on the procedural scene.
 #include <gtest/gtest.h>
 
@@ -442,6 +443,45 @@ TEST(SatDof, NearLayerSpreadsOverSharpBackground) {
   std::printf("[ measured ] near halo (red excess) at 1, 3, 5, 7, 9 px: %.3f %.3f %.3f %.3f %.4f\n",
               ring(layered.out, 0), ring(layered.out, 2), ring(layered.out, 4),
               ring(layered.out, 6), ring(layered.out, 8));
+}
+
+// Behind a near object the far layer is read with the far pixels' own (small) radius: a bright
+// far pixel (CoC 2) just outside a blurred near square (pure red, CoC -16) does not show through
+// the square more than R_far + 1.5 px inside its edge, where the output is the square's colour
+// exactly (G = B = 0), as in the scatter, whose far splats reach 1.5 px. `sat` gathers the
+// highlight into the square with the square's radius.
+TEST(SatDof, NearObjectHidesSmallBlurBehindIt) {
+  const std::ptrdiff_t size = 128, s0 = 40, s1 = 88;
+  auto square = [&](std::ptrdiff_t x, std::ptrdiff_t y) {
+    return x >= s0 && x < s1 && y >= s0 && y < s1;
+  };
+  Image color = make_image(size, size, 3, [&](auto x, auto y, int c) {
+    return square(x, y) ? (c == 0 ? 1.f : 0.f) : 0.2f;
+  });
+  for (int c = 0; c < 3; ++c) color(s0 - 1, 64, c) = 1000.f;  // a highlight left of the edge
+  const Image coc =
+      make_coc(size, size, [&](auto x, auto y) { return square(x, y) ? -16.f : 2.f; });
+  const Result plain = run("sat", color, coc), layered = run("sat-layers", color, coc);
+  double layered_green = 0, plain_green = 0;
+  for (std::ptrdiff_t y = 56; y < 72; ++y)
+    for (std::ptrdiff_t x = s0 + 3; x < s0 + 8; ++x) {
+      layered_green = std::max(layered_green, double(layered.out(x, y, 1)));
+      plain_green = std::max(plain_green, double(plain.out(x, y, 1)));
+    }
+  EXPECT_EQ(layered_green, 0.0);
+  EXPECT_GT(plain_green, 1.0);
+  // Reference: the scatter shows no green there either.
+  Image reference;
+  DofReport report;
+  find_dof_method("scatter").run(reference, color, coc.plane(0), {}, report);
+  double scatter_green = 0;
+  for (std::ptrdiff_t y = 56; y < 72; ++y)
+    for (std::ptrdiff_t x = s0 + 3; x < s0 + 8; ++x)
+      scatter_green = std::max(scatter_green, double(reference(x, y, 1)));
+  EXPECT_LT(scatter_green, 1e-6);
+  std::printf("[ measured ] green 3-7 px inside the near edge: sat %.3f, sat-layers %.3g, "
+              "scatter %.3g\n",
+              plain_green, layered_green, scatter_green);
 }
 
 // Against the scatter reference on the procedural scene (640 x 360, thin-lens CoC). Both are

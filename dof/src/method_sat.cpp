@@ -311,7 +311,7 @@ void run_sat_layers(Image& out, const Image& color, ConstPlane coc, const DofSet
   const bool has_near = common.tiles.has_near();
   const bool has_far = common.tiles.has_far() || !common.skip;
 
-  // Far tables: channels x α C, then α. Near tables: the same, then α R.
+  // Per layer the tables of channels x α C, then α, then α R.
   auto start = Clock::now();
   std::vector<SummedAreaTable> far, near;
   if (has_far)
@@ -371,7 +371,7 @@ void run_sat_layers(Image& out, const Image& color, ConstPlane coc, const DofSet
         const bool has_front = front_cover > kMinCoverage;
         // Near over the base with the coverages as alphas, renormalised by their union (what
         // `scatter` does): continuous where the far coverage behind a near edge fades out.
-        const double base_alpha = sharp ? 1.0 : std::min(back_cover, 1.0);
+        const double base_alpha = sharp ? 1.0 : has_base ? std::min(back_cover, 1.0) : 0.0;
         const double total = front_cover + (1 - front_cover) * base_alpha;
         for (int ch = 0; ch < channels; ++ch) {
           const std::size_t k = std::size_t(ch);
