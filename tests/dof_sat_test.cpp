@@ -4,8 +4,8 @@
 // larger than the frame, 4096-wide rows), in-focus identity bit for bit, constant colour under
 // any CoC map, outputs within the input's range, no leak of sharp colours into the background
 // (sat-layers), the near layer spreading over a sharp background and hiding a small far blur
-// behind it, thread-count independence,
-// skipping, and the error against the `scatter` reference on the procedural scene.
+// behind it, thread-count independence, skipping, and the error against the `scatter` reference
+// on the procedural scene.
 #include <gtest/gtest.h>
 
 #include <algorithm>
