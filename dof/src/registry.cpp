@@ -14,6 +14,8 @@ void run_scatter(Image&, const Image&, ConstPlane, const DofSettings&, DofReport
 void run_auto(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
 void run_poisson(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
 void run_pyramid_layers(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
+void run_sat(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
+void run_sat_layers(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
 }  // namespace dof_detail
 
 namespace {
@@ -32,6 +34,10 @@ constexpr std::array kMethods{
     DofMethod{"pyramid-layers", "CoC depth layers, quasi-convolution pyramids, over (seed 001 4.5)",
               true, true, "O(pixels x layers), layers ~ log1.5(max |CoC|)",
               dof_detail::run_pyramid_layers},
+    DofMethod{"sat", "three boxes from a half-resolution summed-area table (seed 003)", false, true,
+              "O(pixels), independent of the CoC", dof_detail::run_sat},
+    DofMethod{"sat-layers", "near over far summed-area tables normalised by coverage (seed 003)",
+              true, true, "O(pixels), independent of the CoC", dof_detail::run_sat_layers},
     DofMethod{"auto", "the cheapest method whose measured error meets --psnr-budget (auto.hpp)",
               false, false, "the chosen method's", dof_detail::run_auto},
 };
