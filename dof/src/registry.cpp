@@ -11,6 +11,7 @@ void run_adi(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
 void run_mpad(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
 void run_ipf(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
 void run_scatter(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
+void run_gems(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
 }  // namespace dof_detail
 
 namespace {
@@ -24,6 +25,8 @@ constexpr std::array kMethods{
               true, false, "O(pixels x min(max |CoC|, 16)^2)", dof_detail::run_ipf},
     DofMethod{"scatter", "the slow reference: area-normalised anti-aliased CoC discs, depth layers",
               true, false, "O(pixels x CoC^2)", dof_detail::run_scatter},
+    DofMethod{"gems", "GPU Gems 3 ch. 28: blend of 3 blur levels, spread near CoC (seed 002)",
+              true, false, "O(pixels x (1 + min(max |CoC|, 512) / 12))", dof_detail::run_gems},
 };
 
 }  // namespace
