@@ -45,9 +45,10 @@
 //    bilinear upsampling.
 //  - settings.layers is ignored: the seed has no layers (report.layered stays false).
 //
-// Validity: any CoC (clamped as above); the output is a convex combination of blurs of the input
-// with non-negative weights, so it stays within the input's range up to float rounding. A
-// pixel with r = 0 (sharp, no near CoC spread onto it) is its input bit for bit.
+// Validity: any CoC (clamped as above); colour magnitudes below ~1e37 (a sum of 17 values must
+// not overflow). The output is a convex combination of blurs of the input with non-negative
+// weights, so it stays within the input's range up to float rounding. A pixel with r = 0 (sharp,
+// no near CoC spread onto it) is its input bit for bit.
 //
 // Known artifacts (seed 002 §28.7): sharp pixels beside a blurred foreground are blurred along
 // with it (the "haze" of fig. 28-8; intended, by D); in-focus objects bleed onto a blurred
@@ -56,10 +57,13 @@
 // that the 3 x 3 blur and the bilinear upsampling soften.
 //
 // Skipping: a TileMap of 32 x 32 tiles with a margin of how far the near CoC spreads beyond
-// its pixel (below). Tiles that nothing reaches are copied; elsewhere only pixels with r > 0 are
-// blended. The quarter-resolution passes (1/16 of the pixels) run on the whole grid either way,
-// so skipping on or off gives the same bits. No near pixel: steps 1 (CoC), 2, 3 and 4 (CoC)
-// are left out and near = 0.
+// its pixel: 4 (g + 1) + 5 px for a Gaussian of reach g quarter pixels (derived at the margin's
+// definition below; 37 px for R = 10 px, 0 without near pixels, since a far CoC changes only
+// its own pixel). Tiles that nothing reaches are copied; elsewhere every pixel with r = 0 is
+// copied too and the rest blended, and a level that no pixel of a row takes is not formed for
+// that row. The quarter-resolution passes (1/16 of the pixels) run on the whole grid either
+// way, so skipping on or off gives the same bits. No near pixel: steps 1 (CoC), 2, 3 and 4
+// (CoC) are left out and near = 0; R <= r_m: no large level; R <= r_s: no medium level.
 //
 // Parallel: OpenMP over rows; every value is computed the same way whatever the thread count.
 #include <algorithm>
@@ -68,6 +72,7 @@
 #include <cmath>
 #include <cstdio>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "tridiff/blur/kernels.hpp"
@@ -146,27 +151,65 @@ Taps upsample_taps(std::ptrdiff_t native, std::ptrdiff_t quarter) {
   return t;
 }
 
-inline float bilinear(ConstPlane q, const Taps& tx, const Taps& ty, std::ptrdiff_t x,
-                      std::ptrdiff_t y) {
-  const float fx = tx.f[std::size_t(x)], fy = ty.f[std::size_t(y)];
+// Plane q of the quarter grid interpolated vertically at native row y: the row that
+// upsample_span then interpolates horizontally.
+void lerp_rows(ConstPlane q, const Taps& ty, std::ptrdiff_t y, float* row) {
+  const float fy = ty.f[std::size_t(y)];
   const float* r0 = q.row(ty.i0[std::size_t(y)]);
   const float* r1 = q.row(ty.i1[std::size_t(y)]);
-  const std::ptrdiff_t a = tx.i0[std::size_t(x)], b = tx.i1[std::size_t(x)];
-  const float top = (1.f - fx) * r0[a] + fx * r0[b];
-  const float bottom = (1.f - fx) * r1[a] + fx * r1[b];
-  return (1.f - fy) * top + fy * bottom;
+  for (std::ptrdiff_t i = 0; i < q.width(); ++i) row[i] = (1.f - fy) * r0[i] + fy * r1[i];
 }
 
-// The small blur of one channel at (x, y): the mean of the 17 pinwheel pixels, reads clamped.
-inline float small_blur(ConstPlane in, std::ptrdiff_t x, std::ptrdiff_t y) {
-  const std::ptrdiff_t w = in.width(), h = in.height();
-  float sum = 0;
-  for (const auto& tap : kSmallTaps) {
-    const std::ptrdiff_t sx = std::clamp<std::ptrdiff_t>(x + tap[0], 0, w - 1);
-    const std::ptrdiff_t sy = std::clamp<std::ptrdiff_t>(y + tap[1], 0, h - 1);
-    sum += in(sx, sy);
+// dst[x] for x in [x0, x1): the quarter row interpolated horizontally at native column x.
+void upsample_span(const float* quarter_row, const Taps& tx, std::ptrdiff_t x0, std::ptrdiff_t x1,
+                   float* dst) {
+  for (std::ptrdiff_t x = x0; x < x1; ++x) {
+    const float fx = tx.f[std::size_t(x)];
+    dst[x] = (1.f - fx) * quarter_row[tx.i0[std::size_t(x)]] +
+             fx * quarter_row[tx.i1[std::size_t(x)]];
   }
-  return sum * (1.f / 17.f);
+}
+
+// The small blur of one row: dst[x] for x in [x0, x1) is the mean of the 17 pinwheel pixels
+// (kSmallTaps) from rows[k] = row y + k - 2 (clamped). Columns are clamped near the edges; the
+// interior sums the same taps in the same order as straight runs, which vectorise.
+void small_blur_span(const std::array<const float*, 5>& rows, std::ptrdiff_t width,
+                     std::ptrdiff_t x0, std::ptrdiff_t x1, float* dst) {
+  const float* r0 = rows[0];
+  const float* r1 = rows[1];
+  const float* r2 = rows[2];
+  const float* r3 = rows[3];
+  const float* r4 = rows[4];
+  auto edge = [&](std::ptrdiff_t x) {
+    float sum = 0;
+    for (const auto& tap : kSmallTaps)
+      sum += rows[std::size_t(tap[1] + 2)][std::clamp<std::ptrdiff_t>(x + tap[0], 0, width - 1)];
+    return sum * (1.f / 17.f);
+  };
+  const std::ptrdiff_t inner0 = std::clamp<std::ptrdiff_t>(2, x0, x1),
+                       inner1 = std::clamp<std::ptrdiff_t>(width - 2, inner0, x1);
+  for (std::ptrdiff_t x = x0; x < inner0; ++x) dst[x] = edge(x);
+  for (std::ptrdiff_t x = inner0; x < inner1; ++x) {
+    float sum = r2[x];  // kSmallTaps, in its order
+    sum += r0[x];
+    sum += r0[x + 1];
+    sum += r1[x];
+    sum += r1[x + 1];
+    sum += r1[x - 2];
+    sum += r1[x - 1];
+    sum += r2[x - 2];
+    sum += r2[x - 1];
+    sum += r3[x - 1];
+    sum += r3[x];
+    sum += r4[x - 1];
+    sum += r4[x];
+    sum += r2[x + 1];
+    sum += r2[x + 2];
+    sum += r3[x + 1];
+    sum += r3[x + 2];
+    dst[x] = sum * (1.f / 17.f);
+  }
+  for (std::ptrdiff_t x = inner1; x < x1; ++x) dst[x] = edge(x);
 }
 
 // Step 1: the block means of every channel and (near_out non-empty) the block's largest near
@@ -243,7 +286,8 @@ void run_gems(Image& out, const Image& color, ConstPlane coc, const DofSettings&
   // 4 (reach + 1) + 5 native pixels from the near pixel (Chebyshev). Far pixels change only
   // themselves. The TileMap adds the margin to every disc (conservative for the far ones).
   const std::ptrdiff_t margin = near ? kBlock * (gaussian_reach + 1) + 5 : 0;
-  const TileMap tiles(coc, point_below, TileMap::kDefaultTile, margin, team);
+  const TileMap tiles =
+      margin > 0 ? TileMap(coc, point_below, TileMap::kDefaultTile, margin, team) : frame;
   report.stages.push_back({"classify", seconds_since(start)});
 
   // Steps 1-4 on the quarter grid.
@@ -286,34 +330,90 @@ void run_gems(Image& out, const Image& color, ConstPlane coc, const DofSettings&
     report.stages.push_back({"near coc", seconds_since(start)});
   }
 
-  // Step 5: the blend, on the tiles that need it.
+  // Step 5: the blend, row by row on the tiles that need it: first every pixel's weights, then
+  // per channel the levels along the row and their weighted sum.
   start = Clock::now();
   const Taps tx = upsample_taps(width, qw), ty = upsample_taps(height, qh);
   const bool skip = settings.skip_in_focus;
-  const std::ptrdiff_t tiles_x = tiles.tiles_x();
   const std::ptrdiff_t tile = tiles.tile_size();
-#pragma omp parallel for num_threads(team) schedule(static)
-  for (std::ptrdiff_t y = 0; y < height; ++y) {
-    for (std::ptrdiff_t t = 0; t < tiles_x; ++t) {
-      const std::ptrdiff_t x0 = t * tile, x1 = std::min(x0 + tile, width);
-      if (skip && !tiles.needs_work(t, y / tile)) continue;  // copy_unreached_tiles below
-      for (std::ptrdiff_t x = x0; x < x1; ++x) {
-        const float c = coc(x, y);
-        const float far = c >= point_below ? 0.5f * c : 0.f;
-        const float near_r = near ? bilinear(spread.plane(0), tx, ty, x, y) : 0.f;
-        const float r = std::min(std::max(far, near_r), clamp_radius);
-        if (!(r > 0)) {
-          for (int ch = 0; ch < channels; ++ch) out(x, y, ch) = color(x, y, ch);
-          continue;
+#pragma omp parallel num_threads(team)
+  {
+    const auto row_size = static_cast<std::size_t>(width);
+    const auto quarter_size = static_cast<std::size_t>(qw);
+    // Per column: the weights of the unblurred pixel and the small, medium and large levels
+    // (all 0 for a pixel left as it is), and the levels along the row.
+    std::array<std::vector<float>, 4> weight;
+    std::array<std::vector<float>, 4> level;
+    for (std::size_t k = 0; k < 4; ++k) {
+      weight[k].assign(row_size, 0.f);
+      level[k].assign(row_size, 0.f);
+    }
+    std::vector<char> blurred(row_size);
+    std::vector<float> quarter_row(quarter_size);
+    std::vector<std::pair<std::ptrdiff_t, std::ptrdiff_t>> spans;
+#pragma omp for schedule(static)
+    for (std::ptrdiff_t y = 0; y < height; ++y) {
+      // The columns to compute: the tiles that need work (every column without skipping).
+      spans.clear();
+      for (std::ptrdiff_t t = 0; t < tiles.tiles_x(); ++t) {
+        if (skip && !tiles.needs_work(t, y / tile)) continue;  // copy_unreached_tiles below
+        const std::ptrdiff_t x0 = t * tile, x1 = std::min(x0 + tile, width);
+        if (!spans.empty() && spans.back().second == x0)
+          spans.back().second = x1;
+        else
+          spans.emplace_back(x0, x1);
+      }
+      if (spans.empty()) continue;
+      float* near_row = level[0].data();  // free until the channels' pass
+      if (near) {
+        lerp_rows(spread.plane(0), ty, y, quarter_row.data());
+        for (const auto& [x0, x1] : spans) upsample_span(quarter_row.data(), tx, x0, x1, near_row);
+      }
+      const float* coc_row = coc.row(y);
+      std::array<bool, 4> used{};  // whether some pixel of the row takes the level
+      for (const auto& [x0, x1] : spans)
+        for (std::ptrdiff_t x = x0; x < x1; ++x) {
+          const auto i = std::size_t(x);
+          const float c = coc_row[x];
+          const float far = c >= point_below ? 0.5f * c : 0.f;
+          const float r = std::min(std::max(far, near ? near_row[i] : 0.f), clamp_radius);
+          blurred[i] = r > 0;
+          const std::array<float, 4> w =
+              r > 0 ? blend_weights(nodes, r) : std::array<float, 4>{1.f, 0.f, 0.f, 0.f};
+          for (std::size_t k = 0; k < 4; ++k) {
+            weight[k][i] = w[k];
+            used[k] = used[k] || w[k] > 0;
+          }
         }
-        const std::array<float, 4> w = blend_weights(nodes, r);
-        for (int ch = 0; ch < channels; ++ch) {
-          float v = w[0] * color(x, y, ch);
-          if (w[1] > 0) v += w[1] * small_blur(color.plane(ch), x, y);
-          if (w[2] > 0) v += w[2] * bilinear(medium.plane(ch), tx, ty, x, y);
-          if (w[3] > 0) v += w[3] * bilinear(large.plane(ch), tx, ty, x, y);
-          out(x, y, ch) = v;
+      std::array<const float*, 5> rows;
+      for (int ch = 0; ch < channels; ++ch) {
+        const ConstPlane in = color.plane(ch);
+        for (std::ptrdiff_t k = 0; k < 5; ++k)
+          rows[std::size_t(k)] = in.row(std::clamp<std::ptrdiff_t>(y + k - 2, 0, height - 1));
+        if (used[1])
+          for (const auto& [x0, x1] : spans) small_blur_span(rows, width, x0, x1, level[1].data());
+        for (std::size_t k = 2; k < 4; ++k) {
+          if (!used[k]) continue;
+          lerp_rows((k == 2 ? medium : large).plane(ch), ty, y, quarter_row.data());
+          for (const auto& [x0, x1] : spans)
+            upsample_span(quarter_row.data(), tx, x0, x1, level[k].data());
         }
+        const float* in_row = rows[2];
+        float* out_row = out.plane(ch).row(y);
+        const float *w0 = weight[0].data(), *w1 = weight[1].data(), *w2 = weight[2].data(),
+                    *w3 = weight[3].data();
+        const float *small = level[1].data(), *med = level[2].data(), *big = level[3].data();
+        const char* moved = blurred.data();
+        // A level no pixel of the row takes is left out; one that some pixel takes is finite
+        // (below ~1e37) and weighs 0 elsewhere.
+        for (const auto& [x0, x1] : spans)
+          for (std::ptrdiff_t x = x0; x < x1; ++x) {
+            float v = w0[x] * in_row[x];
+            if (used[1]) v += w1[x] * small[x];
+            if (used[2]) v += w2[x] * med[x];
+            if (used[3]) v += w3[x] * big[x];
+            out_row[x] = moved[x] ? v : in_row[x];  // r = 0: the input, bit for bit
+          }
       }
     }
   }
