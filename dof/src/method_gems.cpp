@@ -39,10 +39,11 @@
 //  - The seed fixes the large radius per game; here it follows the frame (R above), so no
 //    CoC in the frame is clamped below kMaxRadius.
 //  - The near Gaussian's width follows R too: sigma_q for R, at least 1/2 quarter pixel.
-//  - Borders: the 4 x 4 blocks of the last row / column may be partial (their mean is over the
-//    pixels present); every read outside the frame or the quarter grid is clamped (replicate),
-//    as a GPU clamp sampler does: the Gaussian and 3 x 3 blurs, the 17-tap pattern and the
-//    bilinear upsampling.
+//  - Borders: every read outside the frame or the quarter grid is mirrored (d c b a | a b c d,
+//    Border::mirror), as the scatter reference folds its discs: the 4 x 4 blocks of the last
+//    row / column when the size is not a multiple of 4, the Gaussian and 3 x 3 blurs, the
+//    17-tap pattern and the bilinear upsampling (whose one-pixel overhang mirrors onto the edge
+//    pixel, as a GPU clamp sampler would).
 //  - settings.layers is ignored: the seed has no layers (report.layered stays false).
 //
 // Validity: any CoC (clamped as above); colour magnitudes below ~1e37 (a sum of 17 values must
@@ -129,7 +130,8 @@ std::array<float, 4> blend_weights(const Nodes& nodes, float r) {
 }
 
 // Bilinear upsampling from the quarter grid: native x reads quarter pixels i0 and i1 with weight
-// 1 - f and f, the quarter pixel j centred on native 4j + 1.5; indices clamped (replicate).
+// 1 - f and f, the quarter pixel j centred on native 4j + 1.5. The lookup overhangs the grid by
+// at most one pixel, where the mirror border and clamping agree.
 struct Taps {
   std::vector<std::ptrdiff_t> i0, i1;
   std::vector<float> f;
@@ -171,8 +173,8 @@ void upsample_span(const float* quarter_row, const Taps& tx, std::ptrdiff_t x0, 
 }
 
 // The small blur of one row: dst[x] for x in [x0, x1) is the mean of the 17 pinwheel pixels
-// (kSmallTaps) from rows[k] = row y + k - 2 (clamped). Columns are clamped near the edges; the
-// interior sums the same taps in the same order as straight runs, which vectorise.
+// (kSmallTaps) from rows[k] = row y + k - 2 (mirrored). Columns are mirrored near the edges;
+// the interior sums the same taps in the same order as straight runs, which vectorise.
 void small_blur_span(const std::array<const float*, 5>& rows, std::ptrdiff_t width,
                      std::ptrdiff_t x0, std::ptrdiff_t x1, float* dst) {
   const float* r0 = rows[0];
@@ -183,7 +185,7 @@ void small_blur_span(const std::array<const float*, 5>& rows, std::ptrdiff_t wid
   auto edge = [&](std::ptrdiff_t x) {
     float sum = 0;
     for (const auto& tap : kSmallTaps)
-      sum += rows[std::size_t(tap[1] + 2)][std::clamp<std::ptrdiff_t>(x + tap[0], 0, width - 1)];
+      sum += rows[std::size_t(tap[1] + 2)][border_index(x + tap[0], width, Border::mirror)];
     return sum * (1.f / 17.f);
   };
   const std::ptrdiff_t inner0 = std::clamp<std::ptrdiff_t>(2, x0, x1),
@@ -213,30 +215,38 @@ void small_blur_span(const std::array<const float*, 5>& rows, std::ptrdiff_t wid
 }
 
 // Step 1: the block means of every channel and (near_out non-empty) the block's largest near
-// radius, each clamped to max_radius; a pixel is near when c <= -point_below.
+// radius, clamped to max_radius; a pixel is near when c <= -point_below. The blocks of the last
+// row and column reach past the frame into its mirror image, so every block holds 16 pixels
+// centred on 4j + 1.5 as the upsampling assumes.
 void downsample(const Image& color, ConstPlane coc, float point_below, float max_radius,
                 Image& mean, Plane near_out, int threads) {
   const std::ptrdiff_t width = color.width(), height = color.height();
   const std::ptrdiff_t qw = mean.width(), qh = mean.height();
   const int channels = color.channels();
+  std::vector<std::ptrdiff_t> column(std::size_t(qw * kBlock));
+  for (std::ptrdiff_t x = 0; x < qw * kBlock; ++x)
+    column[std::size_t(x)] = border_index(x, width, Border::mirror);
 #pragma omp parallel for num_threads(threads) schedule(static)
   for (std::ptrdiff_t j = 0; j < qh; ++j) {
-    const std::ptrdiff_t y0 = j * kBlock, y1 = std::min(y0 + kBlock, height);
+    std::array<std::ptrdiff_t, kBlock> rows;
+    for (std::ptrdiff_t k = 0; k < kBlock; ++k)
+      rows[std::size_t(k)] = border_index(j * kBlock + k, height, Border::mirror);
     for (std::ptrdiff_t i = 0; i < qw; ++i) {
-      const std::ptrdiff_t x0 = i * kBlock, x1 = std::min(x0 + kBlock, width);
-      const float inv_count = 1.f / float((x1 - x0) * (y1 - y0));
+      const std::ptrdiff_t* cols = column.data() + i * kBlock;
       for (int c = 0; c < channels; ++c) {
         const ConstPlane in = color.plane(c);
         float sum = 0;
-        for (std::ptrdiff_t y = y0; y < y1; ++y)
-          for (std::ptrdiff_t x = x0; x < x1; ++x) sum += in(x, y);
-        mean(i, j, c) = sum * inv_count;
+        for (const std::ptrdiff_t y : rows)
+          for (std::ptrdiff_t k = 0; k < kBlock; ++k) sum += in(cols[k], y);
+        mean(i, j, c) = sum * (1.f / float(kBlock * kBlock));
       }
       if (near_out.data() == nullptr) continue;
       float largest = 0;
-      for (std::ptrdiff_t y = y0; y < y1; ++y)
-        for (std::ptrdiff_t x = x0; x < x1; ++x)
-          if (coc(x, y) <= -point_below) largest = std::max(largest, -0.5f * coc(x, y));
+      for (const std::ptrdiff_t y : rows)
+        for (std::ptrdiff_t k = 0; k < kBlock; ++k) {
+          const float c = coc(cols[k], y);
+          if (c <= -point_below) largest = std::max(largest, -0.5f * c);
+        }
       near_out(i, j) = std::min(largest, max_radius);
     }
   }
@@ -304,12 +314,12 @@ void run_gems(Image& out, const Image& color, ConstPlane coc, const DofSettings&
   if (nodes.count >= 3) {
     medium.reset(qw, qh, channels);
     for (int c = 0; c < channels; ++c)
-      convolve_separable(mean.plane(c), medium.plane(c), tent, tent, Border::replicate, team);
+      convolve_separable(mean.plane(c), medium.plane(c), tent, tent, Border::mirror, team);
   }
   if (nodes.count == 4) {
     large.reset(qw, qh, channels);
     for (int c = 0; c < channels; ++c)
-      convolve_separable(mean.plane(c), large.plane(c), gaussian, gaussian, Border::replicate,
+      convolve_separable(mean.plane(c), large.plane(c), gaussian, gaussian, Border::mirror,
                          team);
   }
   report.stages.push_back({"medium and large levels", seconds_since(start)});
@@ -319,14 +329,14 @@ void run_gems(Image& out, const Image& color, ConstPlane coc, const DofSettings&
     start = Clock::now();
     Image blurred(qw, qh, 1), combined(qw, qh, 1);
     convolve_separable(near_coc.plane(0), blurred.plane(0), gaussian, gaussian,
-                       Border::replicate, team);
+                       Border::mirror, team);
     for (std::ptrdiff_t j = 0; j < qh; ++j)
       for (std::ptrdiff_t i = 0; i < qw; ++i) {
         const float d0 = near_coc(i, j, 0), db = blurred(i, j, 0);
         combined(i, j, 0) = 2.f * std::max(d0, db) - d0;  // seed 002 §28.4.3
       }
     spread.reset(qw, qh, 1);
-    convolve_separable(combined.plane(0), spread.plane(0), tent, tent, Border::replicate, team);
+    convolve_separable(combined.plane(0), spread.plane(0), tent, tent, Border::mirror, team);
     report.stages.push_back({"near coc", seconds_since(start)});
   }
 
@@ -389,7 +399,7 @@ void run_gems(Image& out, const Image& color, ConstPlane coc, const DofSettings&
       for (int ch = 0; ch < channels; ++ch) {
         const ConstPlane in = color.plane(ch);
         for (std::ptrdiff_t k = 0; k < 5; ++k)
-          rows[std::size_t(k)] = in.row(std::clamp<std::ptrdiff_t>(y + k - 2, 0, height - 1));
+          rows[std::size_t(k)] = in.row(border_index(y + k - 2, height, Border::mirror));
         if (used[1])
           for (const auto& [x0, x1] : spans) small_blur_span(rows, width, x0, x1, level[1].data());
         for (std::size_t k = 2; k < 4; ++k) {
