@@ -231,15 +231,19 @@ TEST(GemsDof, MatchesSeedListingsInDouble) {
   struct Case {
     std::ptrdiff_t width, height;
     float scale, in_focus;
+    bool far_only = false;
   };
   for (const Case k : {Case{203, 157, 22.f, 1.f}, Case{61, 37, 60.f, 1.f}, Case{17, 5, 22.f, 1.f},
                        Case{2, 3, 22.f, 1.f}, Case{1, 1, 22.f, 1.f}, Case{90, 66, 9.f, 3.f},
-                       Case{90, 66, 4.f, 1.f}, Case{33, 21, 1200.f, 1.f}}) {
+                       Case{90, 66, 4.f, 1.f}, Case{33, 21, 1200.f, 1.f},
+                       Case{101, 79, 30.f, 1.f, true}}) {
     Image color = random_image(k.width, k.height, 3, 0.f, 1.f, 7);
     color(0, 0, 0) = 40.f;
     color(k.width / 2, k.height / 2, 2) = 25.f;
     Image coc = mixed_coc(k.width, k.height, k.scale);
     if (k.width * k.height < 8) coc(0, 0, 0) = -k.scale;  // tiny frames: one near pixel
+    if (k.far_only)
+      coc = make_coc(k.width, k.height, [&](auto x, auto y) { return std::fabs(coc(x, y, 0)); });
     DofSettings settings;
     settings.in_focus_coc_px = k.in_focus;
     const Result r = run(color, coc, settings);

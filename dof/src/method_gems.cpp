@@ -44,6 +44,7 @@
 //    row / column when the size is not a multiple of 4, the Gaussian and 3 x 3 blurs, the
 //    17-tap pattern and the bilinear upsampling (whose one-pixel overhang mirrors onto the edge
 //    pixel, as a GPU clamp sampler would).
+//  - Float throughout; the seed's half-precision and 8-bit render targets quantise.
 //  - settings.layers is ignored: the seed has no layers (report.layered stays false).
 //
 // Validity: any CoC (clamped as above); colour magnitudes below ~1e37 (a sum of 17 values must
@@ -58,13 +59,15 @@
 // that the 3 x 3 blur and the bilinear upsampling soften.
 //
 // Skipping: a TileMap of 32 x 32 tiles with a margin of how far the near CoC spreads beyond
-// its pixel: 4 (g + 1) + 5 px for a Gaussian of reach g quarter pixels (derived at the margin's
-// definition below; 37 px for R = 10 px, 0 without near pixels, since a far CoC changes only
-// its own pixel). Tiles that nothing reaches are copied; elsewhere every pixel with r = 0 is
-// copied too and the rest blended, and a level that no pixel of a row takes is not formed for
-// that row. The quarter-resolution passes (1/16 of the pixels) run on the whole grid either
-// way, so skipping on or off gives the same bits. No near pixel: steps 1 (CoC), 2, 3 and 4
-// (CoC) are left out and near = 0; R <= r_m: no large level; R <= r_s: no medium level.
+// its pixel: 4 (g + 1) + 5 px for the Gaussian's reach of g quarter pixels (derived at the
+// margin's definition below; the kernel's cut tail, 1e-7 of its mass, ends the spread exactly).
+// That is 37 px for R = 10.7 px, about 2.7 R + 9 for large R, and 0 without near pixels, since
+// a far CoC changes only its own pixel. Tiles that nothing reaches are copied; elsewhere every
+// pixel with r = 0 is copied too and the rest blended, and a level that no pixel of a row
+// takes is not formed for that row. The quarter-resolution passes (1/16 of the pixels) run on
+// the whole grid either way, so skipping on or off gives the same bits. No near pixel: steps
+// 1 (CoC), 2, 3 and 4 (CoC) are left out and near = 0; R <= r_m: no large level; R <= r_s: no
+// medium level.
 //
 // Parallel: OpenMP over rows; every value is computed the same way whatever the thread count.
 #include <algorithm>
