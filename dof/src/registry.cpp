@@ -16,6 +16,7 @@ void run_poisson(Image&, const Image&, ConstPlane, const DofSettings&, DofReport
 void run_pyramid_layers(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
 void run_sat(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
 void run_sat_layers(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
+void run_gems(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
 }  // namespace dof_detail
 
 namespace {
@@ -38,6 +39,8 @@ constexpr std::array kMethods{
               "O(pixels), independent of the CoC", dof_detail::run_sat},
     DofMethod{"sat-layers", "near over far summed-area tables normalised by coverage (seed 003)",
               true, true, "O(pixels), independent of the CoC", dof_detail::run_sat_layers},
+    DofMethod{"gems", "GPU Gems 3 ch. 28: blend of 3 blur levels, spread near CoC (seed 002)",
+              true, false, "O(pixels x (1 + min(max |CoC|, 512) / 12))", dof_detail::run_gems},
     DofMethod{"auto", "the cheapest method whose measured error meets --psnr-budget (auto.hpp)",
               false, false, "the chosen method's", dof_detail::run_auto},
 };
