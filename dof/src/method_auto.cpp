@@ -207,7 +207,7 @@ namespace dof_detail {
 
 void run_auto(Image& out, const Image& color, ConstPlane coc, const DofSettings& settings,
               DofReport& report) {
-  validate_coc(color, coc);
+  validate_dof_input(color, coc);  // bad input is named before any choice is made
   const auto start = std::chrono::steady_clock::now();
   const MethodChoice choice = choose_dof_method(coc, settings, builtin_method_table());
   const double choose_seconds =

@@ -432,7 +432,7 @@ void run_gems(Image& out, const Image& color, ConstPlane coc, const DofSettings&
   }
   if (skip)
     for (int ch = 0; ch < channels; ++ch)
-      copy_unreached_tiles(tiles, color.plane(ch), out.plane(ch));
+      copy_unreached_tiles(tiles, color.plane(ch), out.plane(ch), team);
   report.stages.push_back({"blend", seconds_since(start)});
 
   report.skipped_fraction = skip ? 1.0 - tiles.work_fraction() : 0.0;

@@ -319,7 +319,8 @@ void run_pyramid_layers(Image& out, const Image& color, ConstPlane coc,
     }
   }
   if (skip)
-    for (int c = 0; c < channels; ++c) copy_unreached_tiles(tiles, color.plane(c), out.plane(c));
+    for (int c = 0; c < channels; ++c)
+      copy_unreached_tiles(tiles, color.plane(c), out.plane(c), team);
   report.stages.push_back({"composite", composite_seconds + seconds_since(start)});
 
   report.skipped_fraction = skip ? 1.0 - tiles.work_fraction() : 0.0;

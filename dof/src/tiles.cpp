@@ -114,11 +114,11 @@ Rect TileMap::rect(std::ptrdiff_t tx, std::ptrdiff_t ty) const {
   return {x, y, std::min(tile_, width_ - x), std::min(tile_, height_ - y)};
 }
 
-void copy_unreached_tiles(const TileMap& tiles, ConstPlane in, Plane out) {
+void copy_unreached_tiles(const TileMap& tiles, ConstPlane in, Plane out, int threads) {
   if (in.width() != tiles.width() || in.height() != tiles.height() ||
       out.width() != tiles.width() || out.height() != tiles.height())
     throw InvalidArgument("out", -1, -1, "planes must have the tile map's size");
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) num_threads(thread_count(threads))
   for (std::ptrdiff_t ty = 0; ty < tiles.tiles_y(); ++ty)
     for (std::ptrdiff_t tx = 0; tx < tiles.tiles_x(); ++tx) {
       if (tiles.needs_work(tx, ty)) continue;

@@ -86,7 +86,7 @@ class TileMap {
 };
 
 // Copies `in` to `out` (same size) on the tiles that need no work; the other tiles are left as
-// they are. Every method's last step.
-void copy_unreached_tiles(const TileMap& tiles, ConstPlane in, Plane out);
+// they are. Every method's last step. `threads`: 0 = all cores.
+void copy_unreached_tiles(const TileMap& tiles, ConstPlane in, Plane out, int threads = 0);
 
 }  // namespace tridiff
