@@ -495,6 +495,38 @@ def plot_dof_error_vs_time(rows, size="1024x1024"):
     return fig
 
 
+def plot_dof_scenes(rows, size="1024x1024", threads=2):
+    """PSNR against the scatter reference against time, one panel per built-in scene (each made
+    to provoke one artifact), every method a point, the Pareto frontier (no method both faster
+    and more accurate) joined. The reference itself is left out (its PSNR is infinite)."""
+    sel = [r for r in rows if r["kind"] == "method" and r["size"] == size
+           and r["threads"] == threads and r["method"] != "scatter"
+           and np.isfinite(r.get("psnr_vs_scatter", np.nan))]
+    scenes = sorted({r["scene"] for r in sel})
+    colors = method_colors({r["method"] for r in sel})
+    columns = 3
+    fig, axes = plt.subplots(-(-len(scenes) // columns), columns, figsize=(4.2 * columns,
+                             3.2 * -(-len(scenes) // columns)), squeeze=False)
+    for ax in axes.flat[len(scenes):]:
+        ax.axis("off")
+    for ax, scene in zip(axes.flat, scenes):
+        pts = sorted((r["ms"], r["psnr_vs_scatter"], r["method"]) for r in sel
+                     if r["scene"] == scene)
+        for ms, psnr, m in pts:
+            ax.plot(ms, psnr, "o", color=colors[m])
+            ax.annotate(m, (ms, psnr), fontsize=6, xytext=(3, 2), textcoords="offset points")
+        frontier, best = [], -np.inf
+        for ms, psnr, _ in pts:  # by time: a point is on the frontier if it beats all faster
+            if psnr > best:
+                frontier.append((ms, psnr))
+                best = psnr
+        ax.plot(*zip(*frontier), "-", color="black", lw=0.8)
+        ax.set(xscale="log", title=scene, xlabel="time (ms)", ylabel="PSNR vs scatter (dB)")
+    fig.suptitle(f"Depth of field per scene: error against time ({size}, {threads} threads)")
+    fig.tight_layout()
+    return fig
+
+
 def read_png(path):
     return plt.imread(str(path))[..., :3]
 
