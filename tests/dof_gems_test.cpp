@@ -250,7 +250,8 @@ TEST(GemsDof, MatchesSeedListingsInDouble) {
     const Result r = run(color, coc, settings);
     const Image expected = seed_reference(color, coc, k.in_focus);
     const double err = max_difference(r.out, expected);
-    EXPECT_LE(err, 2 * 40 * std::numeric_limits<float>::epsilon()) << k.width << " x " << k.height << ", CoC scale " << k.scale;
+    EXPECT_LE(err, 2 * 40 * std::numeric_limits<float>::epsilon())
+        << k.width << " x " << k.height << ", CoC scale " << k.scale;
     std::printf("[ measured ] %td x %td, CoC scale %g: max |float - double listing| %.3g\n",
                 k.width, k.height, double(k.scale), err);
   }

@@ -371,8 +371,10 @@ TEST(DofHarness, ScatterConservesEnergyOnAUniformCocScene) {
 }
 
 TEST(DofHarness, EveryMethodOnEveryScene) {
-  // Asserts only what holds for any method: the output is finite and the input's shape, and the
-  // reference against itself has no error. The numbers are printed for the record.
+  // Asserts what holds for any method: the output is finite and the input's shape, and the
+  // reference against itself has no error; and for the methods that promise it (keeps_sharp),
+  // that the in-focus region (sharp pixels the reference leaves unchanged) is untouched. The
+  // numbers are printed for the record.
   const std::ptrdiff_t width = 192, height = 128;
   const DofMethod& scatter = find_dof_method("scatter");
   std::printf("[ measured ] %-16s %-10s %8s %7s %8s %8s %9s %9s\n", "scene", "method", "PSNR dB",
@@ -391,6 +393,8 @@ TEST(DofHarness, EveryMethodOnEveryScene) {
             ASSERT_TRUE(std::isfinite(out(x, y, c)))
                 << method.name << " on " << info.name << " at (" << x << ", " << y << ")";
       const DofError e = dof_error(out, reference, s.color, s.coc.plane(0), 1.f);
+      if (method.keeps_sharp)
+        EXPECT_EQ(e.in_focus_max, 0.0) << method.name << " on " << info.name;
       if (method.name == "scatter") {
         EXPECT_EQ(e.rmse, 0.0) << info.name;
         EXPECT_EQ(e.max_abs, 0.0) << info.name;

@@ -62,7 +62,8 @@ std::vector<MethodTableRow> parse_method_table(std::string_view csv) {
     if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
     if (line.empty() || line.front() == '#') continue;
     if (!header_seen) {
-      if (line != kHeader) bad_line(line_number, "the header must be '" + std::string(kHeader) + "'");
+      if (line != kHeader)
+        bad_line(line_number, "the header must be '" + std::string(kHeader) + "'");
       header_seen = true;
       continue;
     }
@@ -103,7 +104,8 @@ std::string format_method_table(std::span<const MethodTableRow> rows) {
 }
 
 std::span<const MethodTableRow> builtin_method_table() {
-  static const std::vector<MethodTableRow> table = parse_method_table(dof_detail::kBuiltinMethodTable);
+  static const std::vector<MethodTableRow> table =
+      parse_method_table(dof_detail::kBuiltinMethodTable);
   return table;
 }
 
@@ -197,7 +199,8 @@ MethodChoice choose_dof_method(ConstPlane coc, const DofSettings& settings,
   int listed = 0;
   for (const Candidate& c : candidates)
     if (&c != &*chosen && listed++ < 3)
-      reason << (listed == 1 ? " Others: " : "; ") << describe(c) << (meets(c) ? "" : " over budget");
+      reason << (listed == 1 ? " Others: " : "; ") << describe(c)
+             << (meets(c) ? "" : " over budget");
   if (!missing.empty()) reason << ". Not in the table: " << missing;
   return {std::string(chosen->method->name), chosen->predicted_seconds, chosen->expected_psnr,
           met, reason.str()};

@@ -70,9 +70,10 @@ TileMap::TileMap(ConstPlane coc, float in_focus_coc_px, std::ptrdiff_t tile,
       info_[std::size_t(ty * tiles_x_ + tx)] = classify(coc, rect(tx, ty), in_focus_);
 
   // 2. Reach: every tile with a disc stamps its largest radius onto the tiles that its pixels'
-  // discs can overlap (its largest extent around the box of its out-of-focus pixels). Clamping the reach at the frame edge also covers a mirror border (the
-  // folded part of a disc lands nearer its centre than the unfolded part would).
-  // Serial: the stamps overlap, and there are few tiles (8160 at 3840 x 2160).
+  // discs can overlap (its largest extent around the box of its out-of-focus pixels). Clamping
+  // the reach at the frame edge also covers a mirror border (the folded part of a disc lands
+  // nearer its centre than the unfolded part would). Serial: the stamps overlap, and there are
+  // few tiles (8160 at 3840 x 2160).
   for (std::ptrdiff_t ty = 0; ty < tiles_y_; ++ty)
     for (std::ptrdiff_t tx = 0; tx < tiles_x_; ++tx) {
       const TileInfo& source = at(tx, ty);
@@ -80,7 +81,8 @@ TileMap::TileMap(ConstPlane coc, float in_focus_coc_px, std::ptrdiff_t tile,
       const bool near = source.kind == TileKind::near || source.kind == TileKind::mixed;
       // A disc wider than the frame reaches all of it: cap before converting (|CoC| may be huge).
       const float radius = std::min(source.max_radius, float(width_ + height_));
-      const std::ptrdiff_t extent = static_cast<std::ptrdiff_t>(std::ceil(radius + 0.5f)) + margin_px;
+      const std::ptrdiff_t extent =
+          static_cast<std::ptrdiff_t>(std::ceil(radius + 0.5f)) + margin_px;
       const Rect& area = source.blurred;
       const std::ptrdiff_t x0 = std::max<std::ptrdiff_t>(area.x - extent, 0) / tile_,
                            x1 = std::min(area.x + area.width - 1 + extent, width_ - 1) / tile_,

@@ -49,6 +49,9 @@ struct DofMethod {
   bool unbounded_blur;     // any CoC at the same cost per pixel
   std::string_view cost;   // how the work grows
   DofRun run;
+  // A sharp pixel that the reference leaves unchanged (no nearer blur covers it) keeps its input
+  // value bit for bit: the method never blurs what is in focus (tests/dof_quality_test.cpp).
+  bool keeps_sharp;
 };
 
 // Every registered method, in a fixed order.
