@@ -192,16 +192,6 @@ Image seed_reference(const Image& color, const Image& coc, float in_focus = 1.f)
   return out;
 }
 
-// Largest |a - b| over every value.
-double max_difference(const Image& a, const Image& b) {
-  double worst = 0;
-  for (int c = 0; c < a.channels(); ++c)
-    for (std::ptrdiff_t y = 0; y < a.height(); ++y)
-      for (std::ptrdiff_t x = 0; x < a.width(); ++x)
-        worst = std::max(worst, std::fabs(double(a(x, y, c)) - double(b(x, y, c))));
-  return worst;
-}
-
 std::ptrdiff_t differing_bits(const Image& a, const Image& b) {
   std::ptrdiff_t differ = 0;
   for (int c = 0; c < a.channels(); ++c)
@@ -249,7 +239,7 @@ TEST(GemsDof, MatchesSeedListingsInDouble) {
     settings.in_focus_coc_px = k.in_focus;
     const Result r = run(color, coc, settings);
     const Image expected = seed_reference(color, coc, k.in_focus);
-    const double err = max_difference(r.out, expected);
+    const double err = image_difference(r.out, expected).max;
     EXPECT_LE(err, 2 * 40 * std::numeric_limits<float>::epsilon())
         << k.width << " x " << k.height << ", CoC scale " << k.scale;
     std::printf("[ measured ] %td x %td, CoC scale %g: max |float - double listing| %.3g\n",
@@ -327,7 +317,7 @@ TEST(GemsDof, CloseToScatterUnderUniformCoc) {
           sum += e * e;
         }
     const double rmse = std::sqrt(sum / double(3 * width * height));
-    const double worst = max_difference(r.out, slow);
+    const double worst = image_difference(r.out, slow).max;
     EXPECT_LE(rmse, b.rmse) << "D " << b.diameter;
     EXPECT_LE(worst, b.max) << "D " << b.diameter;
     std::printf("[ measured ] uniform D=%g vs scatter: RMSE %.4f, max %.4f\n",

@@ -42,23 +42,6 @@ Image random_coc(std::ptrdiff_t width, std::ptrdiff_t height, float lo, float hi
   return make_coc(width, height, [&](auto x, auto y) { return lo + (hi - lo) * u(x, y, 0); });
 }
 
-struct Error {
-  double rmse = 0, max = 0;
-};
-Error difference(const Image& a, const Image& b) {
-  Error e;
-  double sum = 0;
-  for (int c = 0; c < a.channels(); ++c)
-    for (std::ptrdiff_t y = 0; y < a.height(); ++y)
-      for (std::ptrdiff_t x = 0; x < a.width(); ++x) {
-        const double d = double(a(x, y, c)) - double(b(x, y, c));
-        sum += d * d;
-        e.max = std::max(e.max, std::fabs(d));
-      }
-  e.rmse = std::sqrt(sum / double(a.channels() * a.width() * a.height()));
-  return e;
-}
-
 const std::vector<std::pair<std::ptrdiff_t, std::ptrdiff_t>> kSizes = {
     {1, 1}, {2, 3}, {3, 2}, {17, 5}, {5, 17}, {33, 31}, {64, 47}};
 
@@ -232,7 +215,7 @@ TEST(DofPoisson, UniformCocCloseToScatter) {
       {2.f, 0.028, 0.10}, {5.f, 0.017, 0.072}, {11.f, 0.014, 0.057}, {24.f, 0.0066, 0.026}};
   for (const auto& c : cases) {
     const Image coc = make_coc(w, h, [&](auto, auto) { return c.diameter; });
-    const Error e = difference(run(poisson(), color, coc), run(scatter(), color, coc));
+    const auto e = image_difference(run(poisson(), color, coc), run(scatter(), color, coc));
     std::printf("[ measured ] uniform D=%g vs scatter: RMSE %.4f, max %.4f\n", double(c.diameter),
                 e.rmse, e.max);
     EXPECT_LT(e.rmse, c.rmse) << c.diameter;
@@ -251,7 +234,7 @@ TEST(DofPoisson, ProceduralSceneCloseToScatter) {
   auto t1 = Clock::now();
   const Image reference = run(scatter(), scene.color, coc);
   auto t2 = Clock::now();
-  const Error e = difference(gathered, reference);
+  const auto e = image_difference(gathered, reference);
   std::printf("[ measured ] scene %tdx%td vs scatter: RMSE %.4f, max %.4f; poisson %.3f s, "
               "scatter %.3f s\n",
               w, h, e.rmse, e.max, std::chrono::duration<double>(t1 - t0).count(),

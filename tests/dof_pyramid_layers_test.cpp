@@ -243,23 +243,6 @@ TEST(PyramidLayers, SharpPixelsInFrontOfFarBlurUnchanged) {
   }
 }
 
-struct Error {
-  double rmse = 0, max = 0;
-};
-Error error_against(const Image& a, const Image& b) {
-  Error e;
-  double sum = 0;
-  for (int c = 0; c < a.channels(); ++c)
-    for (std::ptrdiff_t y = 0; y < a.height(); ++y)
-      for (std::ptrdiff_t x = 0; x < a.width(); ++x) {
-        const double d = double(a(x, y, c)) - double(b(x, y, c));
-        sum += d * d;
-        e.max = std::max(e.max, std::fabs(d));
-      }
-  e.rmse = std::sqrt(sum / double(a.channels() * a.width() * a.height()));
-  return e;
-}
-
 // Against the scatter reference (disc splats in 1 px layers, mirror border): the Gaussian
 // layers differ from discs in shape, and the border is replicate, so the bounds are measured.
 TEST(PyramidLayers, CloseToScatterReference) {
@@ -268,7 +251,7 @@ TEST(PyramidLayers, CloseToScatterReference) {
     const std::ptrdiff_t w = 120, h = 90;
     const Image color = random_image(w, h, 3, 0.f, 1.f, 5);
     const Image coc = mixed_coc(w, h);
-    const Error e = error_against(run(color, coc).out, run(color, coc, {}, scatter).out);
+    const auto e = image_difference(run(color, coc).out, run(color, coc, {}, scatter).out);
     // Measured RMSE 0.0220, max 0.1489 (white noise in [0, 1)); bounds 1.5x.
     EXPECT_LT(e.rmse, 0.033);
     EXPECT_LT(e.max, 0.22);
@@ -284,7 +267,7 @@ TEST(PyramidLayers, CloseToScatterReference) {
     auto t1 = Clock::now();
     const Result reference = run(scene.color, coc, {}, scatter);
     auto t2 = Clock::now();
-    const Error e = error_against(ours.out, reference.out);
+    const auto e = image_difference(ours.out, reference.out);
     // Measured RMSE 0.0713, max 1.90 (at a highlight of value > 1: a Gaussian keeps more of it
     // at the centre than a flat disc); bounds 1.5x.
     EXPECT_LT(e.rmse, 0.107);

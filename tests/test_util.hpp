@@ -5,7 +5,9 @@
 
 #include <cstddef>
 #include <exception>
+#include <algorithm>
 #include <bit>
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <random>
@@ -68,6 +70,24 @@ inline Image make_coc(std::ptrdiff_t width, std::ptrdiff_t height,
 
 inline bool same_bits(float a, float b) {
   return std::bit_cast<std::uint32_t>(a) == std::bit_cast<std::uint32_t>(b);
+}
+
+// RMSE and largest |a - b| over every value of two images of one shape, in double.
+struct ImageDifference {
+  double rmse = 0, max = 0;
+};
+inline ImageDifference image_difference(const Image& a, const Image& b) {
+  ImageDifference d;
+  double sum = 0;
+  for (int c = 0; c < a.channels(); ++c)
+    for (std::ptrdiff_t y = 0; y < a.height(); ++y)
+      for (std::ptrdiff_t x = 0; x < a.width(); ++x) {
+        const double e = double(a(x, y, c)) - double(b(x, y, c));
+        sum += e * e;
+        d.max = std::max(d.max, std::abs(e));
+      }
+  d.rmse = std::sqrt(sum / double(a.channels() * a.width() * a.height()));
+  return d;
 }
 
 }  // namespace tridiff::testing_util

@@ -183,6 +183,15 @@ void run_pyramid_layers(Image& out, const Image& color, ConstPlane coc,
   const std::ptrdiff_t margin =
       static_cast<std::ptrdiff_t>(std::ceil(kReachPerRadius * max_radius)) + kReachPx;
   const TileMap tiles(coc, sharp_below, kTile, margin, team);
+  if (skip && tiles.work_fraction() == 0) {
+    // Nothing out of focus: the sharp layer alone, which is the input (what the full path gives
+    // bit for bit: weight 1, transmittance 1, no normalisation).
+    out = color;
+    report.stages.push_back({"copy", seconds_since(start)});
+    report.skipped_fraction = 1;
+    report.notes = "no pixel out of focus: copied";
+    return;
+  }
   // No near (far) pixel: no near (far) layer, and no pass for it.
   const std::vector<double> near_d = layer_diameters(tiles.has_near() ? near_max : 0, sharp_below);
   const std::vector<double> far_d = layer_diameters(tiles.has_far() ? far_max : 0, sharp_below);
