@@ -393,8 +393,9 @@ TEST(DofHarness, EveryMethodOnEveryScene) {
             ASSERT_TRUE(std::isfinite(out(x, y, c)))
                 << method.name << " on " << info.name << " at (" << x << ", " << y << ")";
       const DofError e = dof_error(out, reference, s.color, s.coc.plane(0), 1.f);
-      if (method.keeps_sharp)
+      if (method.keeps_sharp) {
         EXPECT_EQ(e.in_focus_max, 0.0) << method.name << " on " << info.name;
+      }
       if (method.name == "scatter") {
         EXPECT_EQ(e.rmse, 0.0) << info.name;
         EXPECT_EQ(e.max_abs, 0.0) << info.name;
