@@ -192,14 +192,6 @@ Image seed_reference(const Image& color, const Image& coc, float in_focus = 1.f)
   return out;
 }
 
-std::ptrdiff_t differing_bits(const Image& a, const Image& b) {
-  std::ptrdiff_t differ = 0;
-  for (int c = 0; c < a.channels(); ++c)
-    for (std::ptrdiff_t y = 0; y < a.height(); ++y)
-      for (std::ptrdiff_t x = 0; x < a.width(); ++x) differ += !same_bits(a(x, y, c), b(x, y, c));
-  return differ;
-}
-
 // Near and far blur up to 22 px with sharp regions between, crossing tile and block edges.
 Image mixed_coc(std::ptrdiff_t width, std::ptrdiff_t height, float scale = 22.f) {
   return make_coc(width, height, [=](auto x, auto y) {

@@ -186,7 +186,8 @@ Image direct_convolution(const Image& color, const MaskKernel& kernel) {
   return out;
 }
 
-std::ptrdiff_t differing_bits(const Image& a, const Image& b) {
+// Like testing_util::differing_bits, and names the first three differing pixels by 8-bit code.
+std::ptrdiff_t differing_codes(const Image& a, const Image& b) {
   EXPECT_EQ(a.width(), b.width());
   EXPECT_EQ(a.height(), b.height());
   EXPECT_EQ(a.channels(), b.channels());
@@ -230,7 +231,7 @@ TEST(IpfModel, MaskFilterEqualsDirectConvolution) {
         for (int parts : {1, 2, 3, 4}) {
           Image out;
           const RunCounts counts = run_mask_model(out, color, kernel, {parts, 0, 1});
-          EXPECT_EQ(differing_bits(out, reference), 0)
+          EXPECT_EQ(differing_codes(out, reference), 0)
               << channels << " channels, mask " << size << ", parts " << parts;
           EXPECT_EQ(counts.plan.columns, parts == 1);
           ++runs;
@@ -296,7 +297,7 @@ TEST(IpfModel, DofEqualsSoftwareMethodBitForBit) {
             Image model;
             const RunCounts counts = run_dof_model(model, c.color, c.z.plane(0), c.coc.plane(0),
                                                    program, {parts, 0, parts == 4 ? 2 : 1});
-            EXPECT_EQ(differing_bits(model, software), 0)
+            EXPECT_EQ(differing_codes(model, software), 0)
                 << "seed " << seed << ", mask " << mask << ", rule " << int(rule)
                 << ", ColorWeight " << color_weight_bits << " bit, parts " << parts;
             EXPECT_EQ(counts.saturated_pixels, stats.saturated_pixels);
@@ -314,7 +315,7 @@ TEST(IpfModel, RegisteredMethodIsTheModelWithCocAsDepth) {
   find_dof_method("ipf").run(method_out, c.color, c.coc.plane(0), {}, report);
   Image model;
   run_dof_model(model, c.color, c.coc.plane(0), c.coc.plane(0), DofProgram{}, {4, 0, 1});
-  EXPECT_EQ(differing_bits(model, method_out), 0);
+  EXPECT_EQ(differing_codes(model, method_out), 0);
   EXPECT_TRUE(contains(report.notes, "saturated"));
 }
 
@@ -386,8 +387,8 @@ TEST(IpfDof, ConstantDepthInFocusFrameUnchanged) {
     Image software, model;
     ipf_dof(software, color, z.plane(0), coc.plane(0), program, 1, false);
     run_dof_model(model, color, z.plane(0), coc.plane(0), program, {3, 0, 1});
-    EXPECT_EQ(differing_bits(software, color), 0) << int(rule);
-    EXPECT_EQ(differing_bits(model, color), 0) << int(rule);
+    EXPECT_EQ(differing_codes(software, color), 0) << int(rule);
+    EXPECT_EQ(differing_codes(model, color), 0) << int(rule);
   }
 }
 
@@ -420,7 +421,7 @@ TEST(IpfDof, ConstantColourKeptWhereNoRegisterSaturates) {
     Image out;
     const IpfDofStats stats = ipf_dof(out, c.color, c.z.plane(0), c.coc.plane(0), program, 1);
     EXPECT_EQ(stats.saturated_pixels, 0);
-    EXPECT_EQ(differing_bits(out, c.color), 0) << int(rule);
+    EXPECT_EQ(differing_codes(out, c.color), 0) << int(rule);
   }
 }
 

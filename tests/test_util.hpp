@@ -72,6 +72,43 @@ inline bool same_bits(float a, float b) {
   return std::bit_cast<std::uint32_t>(a) == std::bit_cast<std::uint32_t>(b);
 }
 
+// How many values of two images differ in their bits (a failure, and -1, if their shapes do).
+inline std::ptrdiff_t differing_bits(const Image& a, const Image& b) {
+  EXPECT_EQ(a.width(), b.width());
+  EXPECT_EQ(a.height(), b.height());
+  EXPECT_EQ(a.channels(), b.channels());
+  if (a.width() != b.width() || a.height() != b.height() || a.channels() != b.channels())
+    return -1;
+  std::ptrdiff_t differ = 0;
+  for (int c = 0; c < a.channels(); ++c)
+    for (std::ptrdiff_t y = 0; y < a.height(); ++y)
+      for (std::ptrdiff_t x = 0; x < a.width(); ++x) differ += !same_bits(a(x, y, c), b(x, y, c));
+  return differ;
+}
+
+// A DOF output against its input, pixel by pixel (every channel bit for bit), split by the CoC
+// map: sharp pixels (|c| < sharp_below) and how many of them changed, and how many out-of-focus
+// pixels moved (that the blur really happened).
+struct FocusChanges {
+  std::ptrdiff_t sharp = 0, sharp_changed = 0, blurred_moved = 0;
+};
+inline FocusChanges focus_changes(const Image& out, const Image& input, const Image& coc,
+                                  float sharp_below = 1.f) {
+  FocusChanges f;
+  for (std::ptrdiff_t y = 0; y < input.height(); ++y)
+    for (std::ptrdiff_t x = 0; x < input.width(); ++x) {
+      bool same = true;
+      for (int c = 0; c < input.channels(); ++c) same &= same_bits(out(x, y, c), input(x, y, c));
+      if (std::abs(coc(x, y, 0)) < sharp_below) {
+        ++f.sharp;
+        f.sharp_changed += !same;
+      } else {
+        f.blurred_moved += !same;
+      }
+    }
+  return f;
+}
+
 // RMSE and largest |a - b| over every value of two images of one shape, in double.
 struct ImageDifference {
   double rmse = 0, max = 0;
