@@ -109,6 +109,22 @@ inline FocusChanges focus_changes(const Image& out, const Image& input, const Im
   return f;
 }
 
+// The values of channel c, widened by a relative 1e-5 for float rounding: where the output of a
+// method that takes convex combinations of its input must stay.
+struct ValueRange {
+  float lo = 0, hi = 0;
+};
+inline ValueRange channel_range(const Image& image, int c) {
+  float lo = INFINITY, hi = -INFINITY;
+  for (std::ptrdiff_t y = 0; y < image.height(); ++y)
+    for (std::ptrdiff_t x = 0; x < image.width(); ++x) {
+      lo = std::min(lo, image(x, y, c));
+      hi = std::max(hi, image(x, y, c));
+    }
+  const float slack = 1e-5f * std::max(std::abs(lo), std::abs(hi));
+  return {lo - slack, hi + slack};
+}
+
 // RMSE and largest |a - b| over every value of two images of one shape, in double.
 struct ImageDifference {
   double rmse = 0, max = 0;

@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "tridiff/solvers/solve.hpp"
+#include "stage_clock.hpp"
 
 namespace tridiff::dof_detail {
 namespace {
@@ -14,16 +15,12 @@ namespace {
 // Adds the time `work` takes to the report as a stage called `name`.
 template <class Work>
 auto timed(DofReport& report, const char* name, Work&& work) {
-  const auto start = std::chrono::steady_clock::now();
   struct Record {
     DofReport& report;
     const char* name;
-    std::chrono::steady_clock::time_point start;
-    ~Record() {
-      report.stages.push_back(
-          {name, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()});
-    }
-  } record{report, name, start};
+    StageClock::time_point start;
+    ~Record() { report.stages.push_back({name, seconds_since(start)}); }
+  } record{report, name, StageClock::now()};
   return work();
 }
 

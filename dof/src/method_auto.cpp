@@ -9,6 +9,7 @@
 
 #include "tridiff/dof/auto.hpp"
 #include "tridiff/dof/tiles.hpp"
+#include "stage_clock.hpp"
 
 namespace tridiff {
 namespace dof_detail {
@@ -211,10 +212,9 @@ namespace dof_detail {
 void run_auto(Image& out, const Image& color, ConstPlane coc, const DofSettings& settings,
               DofReport& report) {
   validate_dof_input(color, coc);  // bad input is named before any choice is made
-  const auto start = std::chrono::steady_clock::now();
+  const auto start = StageClock::now();
   const MethodChoice choice = choose_dof_method(coc, settings, builtin_method_table());
-  const double choose_seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double choose_seconds = seconds_since(start);
   find_dof_method(choice.method).run(out, color, coc, settings, report);
   report.stages.insert(report.stages.begin(), DofStage{"choose", choose_seconds});
   report.chosen_method = choice.method;

@@ -83,6 +83,7 @@
 #include "tridiff/dof/method.hpp"
 #include "tridiff/dof/tiles.hpp"
 #include "tridiff/solvers/solve.hpp"
+#include "stage_clock.hpp"
 
 namespace tridiff {
 namespace {
@@ -266,10 +267,7 @@ void run_gems(Image& out, const Image& color, ConstPlane coc, const DofSettings&
   const std::ptrdiff_t width = color.width(), height = color.height();
   const int channels = color.channels();
   const float point_below = std::max(1.f, settings.in_focus_coc_px);
-  using Clock = std::chrono::steady_clock;
-  auto seconds_since = [](Clock::time_point t) {
-    return std::chrono::duration<double>(Clock::now() - t).count();
-  };
+  using Clock = StageClock;
 
   auto start = Clock::now();
   out.reset(width, height, channels);

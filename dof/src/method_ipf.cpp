@@ -9,6 +9,7 @@
 #include "tridiff/dof/ipf.hpp"
 #include "tridiff/dof/method.hpp"
 #include "tridiff/solvers/solve.hpp"
+#include "stage_clock.hpp"
 
 namespace tridiff {
 namespace ipf {
@@ -212,11 +213,10 @@ void run_ipf(Image& out, const Image& color, ConstPlane coc, const DofSettings& 
   validate_dof_input(color, coc);
   ipf::DofProgram program;
   program.in_focus_coc_px = settings.in_focus_coc_px;
-  const auto start = std::chrono::steady_clock::now();
+  const auto start = StageClock::now();
   const IpfDofStats stats =
       ipf_dof(out, color, coc, coc, program, settings.threads, settings.skip_in_focus);
-  report.stages.push_back(
-      {"ipf", std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()});
+  report.stages.push_back({"ipf", seconds_since(start)});
   report.skipped_fraction = stats.skipped_fraction;
   report.notes = "mask " + std::to_string(program.mask) + ", " +
                  std::to_string(stats.saturated_pixels) +

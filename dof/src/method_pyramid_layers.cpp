@@ -80,6 +80,7 @@
 #include "tridiff/dof/method.hpp"
 #include "tridiff/dof/tiles.hpp"
 #include "tridiff/solvers/solve.hpp"
+#include "stage_clock.hpp"
 
 namespace tridiff {
 namespace {
@@ -162,10 +163,7 @@ void run_pyramid_layers(Image& out, const Image& color, ConstPlane coc,
   const int channels = color.channels();
   const float sharp_below = std::max(1.f, settings.in_focus_coc_px);
   const bool skip = settings.skip_in_focus;
-  using Clock = std::chrono::steady_clock;
-  auto seconds_since = [](Clock::time_point t) {
-    return std::chrono::duration<double>(Clock::now() - t).count();
-  };
+  using Clock = StageClock;
 
   // 1. Tiles, the layers of each side from the CoC range present, every pixel's split.
   auto start = Clock::now();

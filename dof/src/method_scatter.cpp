@@ -58,6 +58,7 @@
 
 #include "tridiff/dof/method.hpp"
 #include "tridiff/solvers/solve.hpp"
+#include "stage_clock.hpp"
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -163,10 +164,7 @@ void run_scatter(Image& out, const Image& color, ConstPlane coc, const DofSettin
                                   ") has |CoC| " + std::to_string(std::fabs(coc(x, y))) +
                                   " px; the scatter reference takes at most " +
                                   std::to_string(int(kMaxDiameter)) + " px");
-  using Clock = std::chrono::steady_clock;
-  auto seconds_since = [](Clock::time_point t) {
-    return std::chrono::duration<double>(Clock::now() - t).count();
-  };
+  using Clock = StageClock;
 
   // 1. Every pixel's disc (its normaliser: a sum over the whole disc, computed once).
   auto start = Clock::now();
