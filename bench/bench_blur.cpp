@@ -1,6 +1,8 @@
 // Blur methods: run time against error, with OpenCV's GaussianBlur as the peer and a plain copy
 // as the floor, all in this one binary so that the ratios are meaningful.
 //   BM_blur_copy/<n>/threads:<t>                      copy of the n x n RGB float image
+//   BM_blur_fma_peak/threads:<t>                      the arithmetic ceiling: independent
+//                                                      512-bit multiply-adds on t threads
 //   BM_blur/<method>/sigma:<s>/<n>/threads:<t>        one registered method, replicate border
 //                                                      (mirror for the diffusion methods)
 //   BM_blur/opencv/sigma:<s>/<n>/threads:<t>          cv::GaussianBlur, float, kernel
@@ -211,6 +213,33 @@ void run_copy(benchmark::State& state, std::ptrdiff_t n, int threads) {
       Counter(2 * 3.0 * n * n * sizeof(float), Counter::kIsIterationInvariantRate);
 }
 
+// The arithmetic floor of a method that needs k vector multiply-adds per 16 pixels is
+// k * pixels / 16 / (this rate): the recursive Gaussian's 32 per 16 pixels, for instance. Twelve
+// independent chains, more than the multiply-add latency times the issue width needs.
+void run_fma_peak(benchmark::State& state, int threads) {
+  typedef float Vec __attribute__((vector_size(64)));
+  constexpr long kSteps = 1 << 22;
+  constexpr int kChains = 12;
+  for (auto _ : state) {
+#pragma omp parallel num_threads(threads)
+    {
+      Vec acc[kChains];
+      for (int j = 0; j < kChains; ++j) acc[j] = Vec{} + float(j);
+      const Vec scale = Vec{} + 0.999999f, add = Vec{} + 1e-7f;
+      for (long i = 0; i < kSteps; ++i)
+        for (int j = 0; j < kChains; ++j) {
+          acc[j] = acc[j] * scale + add;
+          asm volatile("" : "+v"(acc[j]));  // keep every multiply-add
+        }
+      float sum = 0;
+      for (int j = 0; j < kChains; ++j) sum += acc[j][0];
+      benchmark::DoNotOptimize(sum);
+    }
+  }
+  state.counters["vector_fma_per_second"] =
+      Counter(double(kSteps) * kChains * threads, Counter::kIsIterationInvariantRate);
+}
+
 std::string sized(const std::string& base, std::ptrdiff_t n, int threads) {
   return base + "/" + std::to_string(n) + "/threads:" + std::to_string(threads);
 }
@@ -218,6 +247,11 @@ std::string sized(const std::string& base, std::ptrdiff_t n, int threads) {
 void register_all() {
   for (std::ptrdiff_t n : kSizes)
     for (int threads : {1, 2}) {
+      if (n == kSizes[0])
+        benchmark::RegisterBenchmark(
+            ("BM_blur_fma_peak/threads:" + std::to_string(threads)).c_str(), run_fma_peak, threads)
+            ->Unit(benchmark::kMillisecond)
+            ->UseRealTime();
       benchmark::RegisterBenchmark(sized("BM_blur_copy", n, threads).c_str(), run_copy, n,
                                    threads)
           ->Unit(benchmark::kMillisecond)

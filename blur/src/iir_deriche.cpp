@@ -6,14 +6,20 @@
 // conjugate pole pair): the parallel form keeps float rounding small where the poles crowd towards
 // 1 at large sigma. O(1) work per pixel whatever sigma.
 //
-// Layout: both passes run the same lane kernel, one SIMD lane per signal, on a block staged in
-// lane order in per-thread scratch: 64 columns at a time (already in lane order, a row apart),
-// and 32 rows at a time transposed (row_blocks.hpp). Staging keeps the recursion's reads and
-// writes in L2; the image itself is read and written once per pass. Replicate borders start each
-// recursion in its steady state for the edge value, so the result equals the IIR applied to the
-// extended signal.
+// Layout: both passes run the same sweep, one SIMD lane per signal: the columns in place (they are
+// in lane order already), the rows 16 at a time transposed (row_blocks.hpp); see run_iir_deriche
+// for how the two passes share the trips through memory. Replicate borders start each recursion
+// in its steady state for the edge value, so the result equals the IIR applied to the extended
+// signal.
+//
+// Cost: 32 vector multiply-adds per 16 pixels (two sections, both directions, both axes). On the
+// shared 2-core machine a core retires about 2.1e9 512-bit multiply-adds a second (measured), so
+// 4096^2 RGB cannot take less than 24 ms on two cores; it takes about 40.
 #include <algorithm>
 #include <complex>
+#include <vector>
+
+#include <omp.h>
 
 #include "row_blocks.hpp"
 #include "tridiff/blur/blur.hpp"
@@ -75,135 +81,131 @@ inline Lanes load(const float* p) {
 }
 inline void store(float* p, Lanes v) { __builtin_memcpy(p, &v, sizeof v); }
 
-// Filters kVectors x kLanes signals of length n along i: element i of signal (j, l) is in[i *
-// stride + j * kLanes + l], and likewise for causal and out. The causal sweep writes causal, which
-// must not overlap in; the anticausal sweep adds to it and writes the sum to out, which may be
-// causal or in (each input step is read before its output is stored over it), so a block can be
-// filtered in place. Within a step the vectors are independent, so their recursions overlap
-// (kVectors is fixed at compile time: the state stays in registers); each one's dependency chain is
-// one multiply-add per section (the terms that do not depend on y(n-1) are summed first).
-template <int kVectors>
-void filter_lanes(const float* in, float* causal, float* out, std::ptrdiff_t stride,
-                  std::ptrdiff_t n, const Coefficients& k, bool replicate) {
-  // Coefficients as local vectors: stores to out could alias k, so the compiler would reload them
+// The recursion state of kLanes signals between two stretches of a sweep: the last two inputs
+// (x(i-1), x(i-2) going forward, x(i+1), x(i+2) going back) and the last two outputs of each
+// section. Kept in memory as kStateFloats floats, so that a sweep can stop and resume.
+struct State {
+  Lanes x1, x2, yp1, yp2, yq1, yq2;
+};
+constexpr std::ptrdiff_t kStateFloats = sizeof(State) / sizeof(float);
+
+// The state of a sweep that starts on the edge value `edge` (replicate: the recursion's steady
+// state for a constant signal) or on zeros.
+State steady_state(Lanes edge, double gain_p, double gain_q) {
+  return {edge, edge, edge * static_cast<float>(gain_p), edge * static_cast<float>(gain_p),
+          edge * static_cast<float>(gain_q), edge * static_cast<float>(gain_q)};
+}
+
+// Advances kVectors x kLanes signals by `n` steps along i, forward (causal, i = 0, 1, ...) or
+// back (anticausal, i = 0, -1, ...): element i of signal (j, l) is in[i * in_stride + j * kLanes
+// + l], and likewise for out. The causal sweep stores its part in out; the anticausal one adds
+// its part to the causal part (in `causal`, laid out like out) and stores the sum in out, which
+// may be in or causal: each input is read before its output is stored over it. `state`
+// (kVectors x kStateFloats floats) is loaded at the start and saved at the end. Within a step the vectors are independent, so their recursions overlap
+// (kVectors is fixed at compile time: the state stays in registers); each one's dependency chain
+// is one multiply-add per section (the terms that do not depend on y(i-1) are summed first).
+template <bool kCausal, int kVectors>
+void sweep(const float* in, std::ptrdiff_t in_stride, const float* causal, float* out,
+           std::ptrdiff_t out_stride, std::ptrdiff_t n, const Coefficients& coefficients,
+           float* state) {
+  // Coefficients as locals: stores to out could alias them, so the compiler would reload them
   // at every step.
-  const Lanes pb0 = k.s[0].b0 + Lanes{}, pb1 = k.s[0].b1 + Lanes{};
-  const Lanes pc1 = k.s[0].c1 + Lanes{}, pc2 = k.s[0].c2 + Lanes{};
-  const Lanes pa1 = k.s[0].a1 + Lanes{}, pa2 = k.s[0].a2 + Lanes{};
-  const Lanes qb0 = k.s[1].b0 + Lanes{}, qb1 = k.s[1].b1 + Lanes{};
-  const Lanes qc1 = k.s[1].c1 + Lanes{}, qc2 = k.s[1].c2 + Lanes{};
-  const Lanes qa1 = k.s[1].a1 + Lanes{}, qa2 = k.s[1].a2 + Lanes{};
-  const float p_causal = static_cast<float>(k.s[0].causal_gain());
-  const float q_causal = static_cast<float>(k.s[1].causal_gain());
-  const float p_anti = static_cast<float>(k.s[0].anticausal_gain());
-  const float q_anti = static_cast<float>(k.s[1].anticausal_gain());
-  Lanes x1[kVectors], x2[kVectors], yp1[kVectors], yp2[kVectors], yq1[kVectors], yq2[kVectors];
-// Causal sweep (x1 is x(i-1)).
-#pragma GCC unroll 8
-  for (int j = 0; j < kVectors; ++j) {
-    const Lanes x0 = replicate ? load(in + j * kLanes) : Lanes{};
-    x1[j] = x0;
-    yp1[j] = yp2[j] = x0 * p_causal;
-    yq1[j] = yq2[j] = x0 * q_causal;
-  }
-  for (std::ptrdiff_t i = 0; i < n; ++i)
+  const Section p = coefficients.s[0], q = coefficients.s[1];
+  State s[kVectors];
+  __builtin_memcpy(s, state, sizeof s);
+  const std::ptrdiff_t step_in = kCausal ? in_stride : -in_stride;
+  const std::ptrdiff_t step_out = kCausal ? out_stride : -out_stride;
+  for (std::ptrdiff_t i = 0; i < n; ++i, in += step_in, causal += step_out, out += step_out)
 #pragma GCC unroll 8
     for (int j = 0; j < kVectors; ++j) {
-      const Lanes x = load(in + i * stride + j * kLanes);
-      const Lanes yp = (pb0 * x + pb1 * x1[j] - pa2 * yp2[j]) - pa1 * yp1[j];
-      const Lanes yq = (qb0 * x + qb1 * x1[j] - qa2 * yq2[j]) - qa1 * yq1[j];
-      x1[j] = x;
-      yp2[j] = yp1[j], yp1[j] = yp;
-      yq2[j] = yq1[j], yq1[j] = yq;
-      store(causal + i * stride + j * kLanes, yp + yq);
-    }
-// Anticausal sweep (x1, x2 are x(i+1), x(i+2)), adding to the causal part.
-#pragma GCC unroll 8
-  for (int j = 0; j < kVectors; ++j) {
-    const Lanes xn = replicate ? load(in + (n - 1) * stride + j * kLanes) : Lanes{};
-    x1[j] = x2[j] = xn;
-    yp1[j] = yp2[j] = xn * p_anti;
-    yq1[j] = yq2[j] = xn * q_anti;
-  }
-  for (std::ptrdiff_t i = n - 1; i >= 0; --i)
-#pragma GCC unroll 8
-    for (int j = 0; j < kVectors; ++j) {
-      const Lanes yp = (pc1 * x1[j] + pc2 * x2[j] - pa2 * yp2[j]) - pa1 * yp1[j];
-      const Lanes yq = (qc1 * x1[j] + qc2 * x2[j] - qa2 * yq2[j]) - qa1 * yq1[j];
-      x2[j] = x1[j], x1[j] = load(in + i * stride + j * kLanes);
-      yp2[j] = yp1[j], yp1[j] = yp;
-      yq2[j] = yq1[j], yq1[j] = yq;
-      const std::ptrdiff_t at = i * stride + j * kLanes;
-      store(out + at, load(causal + at) + yp + yq);
-    }
-}
-
-// Signals per block: two vectors of lanes, so that two independent recursions hide each other's
-// multiply-add latency. A block is staged in lane order (element i of the 32 signals contiguous),
-// filtered there and written back: its two staged copies (2 x 32 x 4096 floats) stay in L2, and the
-// image is read and written once per pass. Filtering columns in place in the image instead (one or
-// a few cache lines per row, a whole row apart) runs at the latency of memory, not its bandwidth:
-// the prefetchers do not follow that pattern, and a power-of-two pitch maps a strip onto a handful
-// of cache sets.
-constexpr int kBlockVectors = 2;
-constexpr std::ptrdiff_t kBlock = kBlockVectors * kLanes;
-
-constexpr std::ptrdiff_t kPrefetchRows = 24;
-
-// Columns per block of the columns pass: 256 bytes of each row at a time (measured best, 64
-// columns: 12.6 ms per 4096^2 plane against 14.9 for 32 and 15.1 for 128).
-constexpr int kColumnVectors = 4;
-constexpr std::ptrdiff_t kColumnBlock = kColumnVectors * kLanes;
-
-// Copies `columns` (<= kColumnBlock) floats of `rows` rows between two strided layouts. Full blocks
-// move as whole vectors: a library memmove per 128-byte row costs more than the copy.
-void copy_block(const float* src, std::ptrdiff_t src_stride, float* dst, std::ptrdiff_t dst_stride,
-                std::ptrdiff_t rows, std::ptrdiff_t columns) {
-  if (columns < kColumnBlock) {
-    for (std::ptrdiff_t y = 0; y < rows; ++y)
-      std::copy_n(src + y * src_stride, columns, dst + y * dst_stride);
-    return;
-  }
-  for (std::ptrdiff_t y = 0; y < rows; ++y) {
-    if (y + kPrefetchRows < rows)  // a row apart, the hardware prefetchers do not follow
-      for (int j = 0; j < kColumnVectors; ++j) {
-        __builtin_prefetch(src + (y + kPrefetchRows) * src_stride + j * kLanes);
-        __builtin_prefetch(dst + (y + kPrefetchRows) * dst_stride + j * kLanes, 1);
+      State& t = s[j];
+      const Lanes x = load(in + j * kLanes);
+      Lanes yp, yq;
+      if constexpr (kCausal) {
+        yp = (p.b0 * x + p.b1 * t.x1 - p.a2 * t.yp2) - p.a1 * t.yp1;
+        yq = (q.b0 * x + q.b1 * t.x1 - q.a2 * t.yq2) - q.a1 * t.yq1;
+      } else {
+        yp = (p.c1 * t.x1 + p.c2 * t.x2 - p.a2 * t.yp2) - p.a1 * t.yp1;
+        yq = (q.c1 * t.x1 + q.c2 * t.x2 - q.a2 * t.yq2) - q.a1 * t.yq1;
       }
-    for (int j = 0; j < kColumnVectors; ++j)
-      store(dst + y * dst_stride + j * kLanes, load(src + y * src_stride + j * kLanes));
-  }
-}
-
-// Columns: kColumnBlock columns at a time are copied into lanes (they already are in lane order, a
-// row apart), filtered and copied back into out. The last block may be partial (its unused lanes
-// hold zeros).
-void filter_columns(ConstPlane in, Plane out, const Coefficients& k, bool replicate, int threads) {
-  const std::ptrdiff_t w = in.width(), h = in.height();
-  const std::ptrdiff_t blocks = (w + kColumnBlock - 1) / kColumnBlock;
-#pragma omp parallel num_threads(threads)
-  {
-    float* lanes_in = scratch(0, h * kColumnBlock);
-    float* lanes_out = scratch(1, h * kColumnBlock);
-#pragma omp for schedule(static)
-    for (std::ptrdiff_t b = 0; b < blocks; ++b) {
-      const std::ptrdiff_t x0 = b * kColumnBlock, columns = std::min(kColumnBlock, w - x0);
-      if (columns < kColumnBlock)
-        std::fill_n(lanes_in, h * kColumnBlock, 0.f);  // quiet unused lanes
-      copy_block(in.row(0) + x0, in.pitch(), lanes_in, kColumnBlock, h, columns);
-      filter_lanes<kColumnVectors>(lanes_in, lanes_out, lanes_out, kColumnBlock, h, k, replicate);
-      copy_block(lanes_out, kColumnBlock, out.row(0) + x0, out.pitch(), h, columns);
+      t.x2 = t.x1, t.x1 = x;
+      t.yp2 = t.yp1, t.yp1 = yp;
+      t.yq2 = t.yq1, t.yq1 = yq;
+      store(out + j * kLanes, kCausal ? yp + yq : load(causal + j * kLanes) + yp + yq);
     }
+  __builtin_memcpy(state, s, sizeof s);
+}
+
+// The state before the first step of a sweep over `vectors` x kLanes signals whose first sample
+// (in the sweep's order) is at edge[0, vectors x kLanes).
+template <bool kCausal>
+void start_state(const float* edge, std::ptrdiff_t vectors, const Coefficients& k, bool replicate,
+                 float* state) {
+  for (std::ptrdiff_t j = 0; j < vectors; ++j) {
+    const Lanes x = replicate ? load(edge + j * kLanes) : Lanes{};
+    const State s = kCausal ? steady_state(x, k.s[0].causal_gain(), k.s[1].causal_gain())
+                            : steady_state(x, k.s[0].anticausal_gain(), k.s[1].anticausal_gain());
+    __builtin_memcpy(state + j * kStateFloats, &s, sizeof s);
   }
 }
 
-// Rows, in place: kBlock rows at a time in lane order (row_blocks.hpp), the causal sweep going
-// through a second per-thread buffer.
-void filter_rows(Plane plane, const Coefficients& k, bool replicate, int threads) {
-  for_each_row_block<kBlock>(plane, threads, [&](float* lanes, std::ptrdiff_t w) {
-    float* causal = scratch(kFreeScratchSlot, w * kBlock);
-    filter_lanes<kBlockVectors>(lanes, causal, lanes, kBlock, w, k, replicate);
-  });
+// The columns pass streams along the rows: the causal sweep goes down the image kBandRows rows at
+// a time and stores its part in out, then the anticausal one comes back up, reading in and the
+// causal part, and stores the sum. Each thread owns a range of whole vectors of columns, whose
+// recursion state waits in per-thread scratch from one band to the next. Every access is a run
+// along a row, which the prefetchers follow (filtering a block of columns down the image, a few
+// cache lines a row apart, runs at the latency of memory instead). The rows pass is fused into
+// the way back up: a band just finished by the anticausal sweep is still in cache, and is
+// filtered along its rows there, kRowBlock rows per thread. The image is read twice and written
+// twice in all, where separate passes would read it three times and write it three times.
+constexpr int kColumnVectors = 2;  // two independent recursions hide each other's latency
+constexpr int kRowVectors = 1;     // the rows pass: 16 rows in lane order, 256 KiB at width 4096
+constexpr std::ptrdiff_t kRowBlock = kRowVectors * kLanes;
+// Rows per stretch of a column sweep: its state is loaded and saved once per stretch, and the
+// stretch reads 2 x kStreamRows rows side by side (measured best of 2, 4, 8).
+constexpr std::ptrdiff_t kStreamRows = 8;
+constexpr int kColumnStateSlot = kFreeScratchSlot + 1;
+
+// Whole vectors of columns that one thread filters: [x0, x0 + 16 vectors) of in and out.
+struct ColumnRange {
+  ConstPlane in;
+  Plane out;
+  std::ptrdiff_t x0 = 0, vectors = 0;
+  float* state = nullptr;  // vectors x kStateFloats
+};
+
+// One band of a column sweep: rows [y, y + rows) going down (causal) or [y - rows + 1, y] going
+// up (anticausal).
+template <bool kCausal>
+void column_band(const ColumnRange& c, std::ptrdiff_t y, std::ptrdiff_t rows,
+                 const Coefficients& k) {
+  const std::ptrdiff_t in_pitch = c.in.pitch(), out_pitch = c.out.pitch();
+  for (std::ptrdiff_t done = 0; done < rows; done += kStreamRows) {
+    const std::ptrdiff_t n = std::min(kStreamRows, rows - done);
+    const std::ptrdiff_t row = kCausal ? y + done : y - done;
+    const float* src = c.in.row(row) + c.x0;
+    float* dst = c.out.row(row) + c.x0;
+    std::ptrdiff_t j = 0;
+    for (; j + kColumnVectors <= c.vectors; j += kColumnVectors)
+      sweep<kCausal, kColumnVectors>(src + j * kLanes, in_pitch, dst + j * kLanes,
+                                     dst + j * kLanes, out_pitch, n, k,
+                                     c.state + j * kStateFloats);
+    for (; j < c.vectors; ++j)
+      sweep<kCausal, 1>(src + j * kLanes, in_pitch, dst + j * kLanes, dst + j * kLanes,
+                        out_pitch, n, k, c.state + j * kStateFloats);
+  }
+}
+
+// Both sweeps along the rows of a block in lane order (w signals of kRowBlock lanes), in place.
+void filter_row_lanes(float* lanes, std::ptrdiff_t w, const Coefficients& k, bool replicate) {
+  float* causal = scratch(kFreeScratchSlot, w * kRowBlock);
+  float state[kRowVectors * kStateFloats];
+  start_state<true>(lanes, kRowVectors, k, replicate, state);
+  sweep<true, kRowVectors>(lanes, kRowBlock, causal, causal, kRowBlock, w, k, state);
+  const std::ptrdiff_t last = (w - 1) * kRowBlock;
+  start_state<false>(lanes + last, kRowVectors, k, replicate, state);
+  sweep<false, kRowVectors>(lanes + last, kRowBlock, causal + last, lanes + last, kRowBlock, w, k,
+                            state);
 }
 
 }  // namespace
@@ -211,9 +213,58 @@ void filter_rows(Plane plane, const Coefficients& k, bool replicate, int threads
 void run_iir_deriche(ConstPlane in, Plane out, const BlurSettings& settings) {
   const Coefficients k = deriche_coefficients(settings.sigma);
   const bool replicate = settings.border == Border::replicate;
-  const int threads = threads_of(settings);
-  filter_columns(in, out, k, replicate, threads);
-  filter_rows(out, k, replicate, threads);
+  const std::ptrdiff_t w = in.width(), h = in.height();
+  const std::ptrdiff_t vectors = w / kLanes, rest = w - vectors * kLanes;
+  // The last w mod 16 columns go through a strip one vector wide (its unused lanes zero),
+  // filtered by the last thread.
+  std::vector<float> strip_in, strip_out;
+  if (rest > 0) {
+    strip_in.assign(h * kLanes, 0.f);
+    strip_out.resize(h * kLanes);
+    for (std::ptrdiff_t y = 0; y < h; ++y)
+      std::copy_n(in.row(y) + vectors * kLanes, rest, strip_in.data() + y * kLanes);
+  }
+  auto rows_pass = [&](float* lanes, std::ptrdiff_t width) {
+    filter_row_lanes(lanes, width, k, replicate);
+  };
+#pragma omp parallel num_threads(threads_of(settings))
+  {
+    const int team = omp_get_num_threads(), t = omp_get_thread_num();
+    const std::ptrdiff_t v0 = vectors * t / team, v1 = vectors * (t + 1) / team;
+    const bool owns_strip = rest > 0 && t == team - 1;
+    float strip_state[kStateFloats];
+    ColumnRange ranges[2];
+    int count = 0;
+    if (v1 > v0)
+      ranges[count++] = {in, out, v0 * kLanes, v1 - v0,
+                         scratch(kColumnStateSlot, (v1 - v0) * kStateFloats)};
+    if (owns_strip)
+      ranges[count++] = {ConstPlane(strip_in.data(), kLanes, h, kLanes),
+                         Plane(strip_out.data(), kLanes, h, kLanes), 0, 1, strip_state};
+    const std::ptrdiff_t band_rows = kRowBlock * team, bands = (h + band_rows - 1) / band_rows;
+
+    for (int r = 0; r < count; ++r)
+      start_state<true>(ranges[r].in.row(0) + ranges[r].x0, ranges[r].vectors, k, replicate,
+                        ranges[r].state);
+    for (std::ptrdiff_t y = 0; y < h; y += band_rows)
+      for (int r = 0; r < count; ++r)
+        column_band<true>(ranges[r], y, std::min(band_rows, h - y), k);
+
+    for (int r = 0; r < count; ++r)
+      start_state<false>(ranges[r].in.row(h - 1) + ranges[r].x0, ranges[r].vectors, k, replicate,
+                         ranges[r].state);
+    for (std::ptrdiff_t b = bands - 1; b >= 0; --b) {
+      const std::ptrdiff_t y0 = b * band_rows, y1 = std::min(h, y0 + band_rows);
+      for (int r = 0; r < count; ++r) column_band<false>(ranges[r], y1 - 1, y1 - y0, k);
+      if (owns_strip)
+        for (std::ptrdiff_t y = y0; y < y1; ++y)
+          std::copy_n(strip_out.data() + y * kLanes, rest, out.row(y) + vectors * kLanes);
+      // Every column of the band is final: the rows pass may read the other threads' columns.
+#pragma omp barrier
+      const std::ptrdiff_t y = y0 + t * kRowBlock;
+      if (y < y1) filter_row_block<kRowBlock>(out, y, rows_pass);
+    }
+  }
 }
 
 }  // namespace tridiff::blur_detail

@@ -30,10 +30,31 @@ inline float* scratch(int which, std::size_t floats) {
   return buffer.data();
 }
 
-// Rows of `plane`, in place, W at a time: each block of W rows is transposed into lane order
-// (element x of row l at lanes[x * W + l]), `kernel(lanes, width)` overwrites it with its
-// result, and it is transposed back. A partial last block is staged through a zeroed W-row
-// buffer (its unused lanes hold zeros). Blocks are split statically over `threads` threads.
+// Rows [y0, y0 + W) of `plane` (fewer at its bottom), in place: the block is transposed into
+// lane order (element x of row l at lanes[x * W + l]), `kernel(lanes, width)` overwrites it with
+// its result, and it is transposed back. A partial block is staged through a zeroed W-row buffer
+// (its unused lanes hold zeros). Uses the calling thread's scratch slots 0 and 1.
+template <int W, class Kernel>
+void filter_row_block(Plane plane, std::ptrdiff_t y0, Kernel& kernel) {
+  const std::ptrdiff_t w = plane.width(), rows = std::min<std::ptrdiff_t>(W, plane.height() - y0);
+  float* lanes = scratch(kRowBlockLanesSlot, static_cast<std::size_t>(w) * W);
+  float* first = plane.row(y0);
+  std::ptrdiff_t pitch = plane.pitch();
+  if (rows < W) {  // stage the last rows in a full block
+    first = scratch(kRowBlockStagingSlot, static_cast<std::size_t>(w) * W);
+    std::fill_n(first, w * W, 0.f);
+    for (std::ptrdiff_t r = 0; r < rows; ++r) std::copy_n(plane.row(y0 + r), w, first + r * w);
+    pitch = w;
+  }
+  detail::transpose_into_lanes<float, W>(first, pitch, w, lanes);
+  kernel(lanes, w);
+  detail::transpose_from_lanes<float, W>(lanes, w, first, pitch);
+  if (rows < W)
+    for (std::ptrdiff_t r = 0; r < rows; ++r) std::copy_n(first + r * w, w, plane.row(y0 + r));
+}
+
+// Rows of `plane`, in place, W at a time (filter_row_block), the blocks split statically over
+// `threads` threads.
 //
 // The kernel gets no per-thread state from here: one that needs buffers of its own takes them
 // from scratch(kFreeScratchSlot + i, n) (or a thread_local), which costs a size check per
@@ -41,29 +62,9 @@ inline float* scratch(int which, std::size_t floats) {
 // through this template, and cheaper than a fresh allocation per parallel region.
 template <int W, class Kernel>
 void for_each_row_block(Plane plane, int threads, Kernel kernel) {
-  const std::ptrdiff_t w = plane.width(), h = plane.height();
-  const std::ptrdiff_t blocks = (h + W - 1) / W;
-#pragma omp parallel num_threads(threads)
-  {
-    float* lanes = scratch(kRowBlockLanesSlot, static_cast<std::size_t>(w) * W);
-#pragma omp for schedule(static)
-    for (std::ptrdiff_t b = 0; b < blocks; ++b) {
-      const std::ptrdiff_t y0 = b * W, rows = std::min<std::ptrdiff_t>(W, h - y0);
-      float* first = plane.row(y0);
-      std::ptrdiff_t pitch = plane.pitch();
-      if (rows < W) {  // stage the last rows in a full block
-        first = scratch(kRowBlockStagingSlot, static_cast<std::size_t>(w) * W);
-        std::fill_n(first, w * W, 0.f);
-        for (std::ptrdiff_t r = 0; r < rows; ++r) std::copy_n(plane.row(y0 + r), w, first + r * w);
-        pitch = w;
-      }
-      detail::transpose_into_lanes<float, W>(first, pitch, w, lanes);
-      kernel(lanes, w);
-      detail::transpose_from_lanes<float, W>(lanes, w, first, pitch);
-      if (rows < W)
-        for (std::ptrdiff_t r = 0; r < rows; ++r) std::copy_n(first + r * w, w, plane.row(y0 + r));
-    }
-  }
+  const std::ptrdiff_t blocks = (plane.height() + W - 1) / W;
+#pragma omp parallel for num_threads(threads) schedule(static)
+  for (std::ptrdiff_t b = 0; b < blocks; ++b) filter_row_block<W>(plane, b * W, kernel);
 }
 
 }  // namespace tridiff::blur_detail
