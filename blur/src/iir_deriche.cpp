@@ -101,9 +101,10 @@ State steady_state(Lanes edge, double gain_p, double gain_q) {
 // + l], and likewise for out. The causal sweep stores its part in out; the anticausal one adds
 // its part to the causal part (in `causal`, laid out like out) and stores the sum in out, which
 // may be in or causal: each input is read before its output is stored over it. `state`
-// (kVectors x kStateFloats floats) is loaded at the start and saved at the end. Within a step the vectors are independent, so their recursions overlap
-// (kVectors is fixed at compile time: the state stays in registers); each one's dependency chain
-// is one multiply-add per section (the terms that do not depend on y(i-1) are summed first).
+// (kVectors x kStateFloats floats) is loaded at the start and saved at the end. Within a step
+// the vectors are independent, so their recursions overlap (kVectors is fixed at compile time:
+// the state stays in registers); each one's dependency chain is one multiply-add per section
+// (the terms that do not depend on y(i-1) are summed first).
 template <bool kCausal, int kVectors>
 void sweep(const float* in, std::ptrdiff_t in_stride, const float* causal, float* out,
            std::ptrdiff_t out_stride, std::ptrdiff_t n, const Coefficients& coefficients,
@@ -156,7 +157,8 @@ void start_state(const float* edge, std::ptrdiff_t vectors, const Coefficients& 
 // along a row, which the prefetchers follow (filtering a block of columns down the image, a few
 // cache lines a row apart, runs at the latency of memory instead). The rows pass is fused into
 // the way back up: a band just finished by the anticausal sweep is still in cache, and is
-// filtered along its rows there, kRowBlock rows per thread. The image is read twice and written
+// filtered along its rows there, kBandBlocks blocks of kRowBlock rows per thread. The image is
+// read twice and written
 // twice in all, where separate passes would read it three times and write it three times.
 constexpr int kColumnVectors = 2;  // two independent recursions hide each other's latency
 constexpr int kRowVectors = 1;     // the rows pass: 16 rows in lane order, 256 KiB at width 4096
@@ -164,6 +166,10 @@ constexpr std::ptrdiff_t kRowBlock = kRowVectors * kLanes;
 // Rows per stretch of a column sweep: its state is loaded and saved once per stretch, and the
 // stretch reads 2 x kStreamRows rows side by side (measured best of 2, 4, 8).
 constexpr std::ptrdiff_t kStreamRows = 8;
+// Row blocks per thread in a band of the way back up: each band ends in a barrier, and four
+// blocks (a 2 MiB band at width 4096 on two threads, served from L3) measured 7 % faster than
+// one, and fewer barriers lose less when a core is shared with another process.
+constexpr std::ptrdiff_t kBandBlocks = 4;
 constexpr int kColumnStateSlot = kFreeScratchSlot + 1;
 
 // Whole vectors of columns that one thread filters: [x0, x0 + 16 vectors) of in and out.
@@ -241,7 +247,8 @@ void run_iir_deriche(ConstPlane in, Plane out, const BlurSettings& settings) {
     if (owns_strip)
       ranges[count++] = {ConstPlane(strip_in.data(), kLanes, h, kLanes),
                          Plane(strip_out.data(), kLanes, h, kLanes), 0, 1, strip_state};
-    const std::ptrdiff_t band_rows = kRowBlock * team, bands = (h + band_rows - 1) / band_rows;
+    const std::ptrdiff_t band_rows = kRowBlock * kBandBlocks * team;
+    const std::ptrdiff_t bands = (h + band_rows - 1) / band_rows;
 
     for (int r = 0; r < count; ++r)
       start_state<true>(ranges[r].in.row(0) + ranges[r].x0, ranges[r].vectors, k, replicate,
@@ -261,8 +268,8 @@ void run_iir_deriche(ConstPlane in, Plane out, const BlurSettings& settings) {
           std::copy_n(strip_out.data() + y * kLanes, rest, out.row(y) + vectors * kLanes);
       // Every column of the band is final: the rows pass may read the other threads' columns.
 #pragma omp barrier
-      const std::ptrdiff_t y = y0 + t * kRowBlock;
-      if (y < y1) filter_row_block<kRowBlock>(out, y, rows_pass);
+      for (std::ptrdiff_t y = y0 + t * kRowBlock; y < y1; y += team * kRowBlock)
+        filter_row_block<kRowBlock>(out, y, rows_pass);
     }
   }
 }

@@ -17,7 +17,7 @@ namespace tridiff::blur_detail {
 inline constexpr int kRowBlockLanesSlot = 0;
 inline constexpr int kRowBlockStagingSlot = 1;
 inline constexpr int kFreeScratchSlot = 2;
-inline constexpr int kScratchSlots = 4;
+inline constexpr int kScratchSlots = 8;
 
 // Per-thread scratch that lives from call to call (OpenMP keeps its threads): a fresh 512 KiB
 // buffer costs 128 page faults per call and thread, milliseconds on a virtual machine, more
