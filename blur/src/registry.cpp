@@ -57,8 +57,8 @@ const std::vector<BlurMethod>& registry() {
        false, 5e-4, 1.0, 1024.0, kReplicateZero, "O(pixels), independent of sigma",
        blur_detail::run_iir_deriche},
       {"iir-decimated",
-       "the recursive Gaussian on the plane decimated by f = 2^k <= sigma / 4 (binomial [1 4 6 "
-       "4 1] per level), brought back with a cubic B-spline; for sigma >= 8",
+       "the recursive Gaussian on the plane decimated by f = 2^k <= sigma / 2 (binomial [1 4 6 "
+       "4 1] per level, at most 16), brought back with a cubic B-spline; for sigma >= 4",
        false, 5e-4, 4.0, 1024.0, BorderSet{Border::replicate},
        "O(pixels), independent of sigma: the recursion on pixels / f^2, a decimation and an "
        "up-sampling of the plane",
