@@ -35,16 +35,9 @@ void run_iir_deriche(ConstPlane, Plane, const BlurSettings&);  // iir_deriche.cp
 
 namespace {
 
-constexpr int kLanes = 16;
-using Vec = float __attribute__((vector_size(kLanes * sizeof(float))));
-using Index = int __attribute__((vector_size(kLanes * sizeof(int))));
-
-inline Vec load(const float* p) {
-  Vec v;
-  __builtin_memcpy(&v, p, sizeof v);
-  return v;
-}
-inline void store(float* p, Vec v) { __builtin_memcpy(p, &v, sizeof v); }
+constexpr int kLanes = kVectorLanes;
+using Vec = FloatVector;
+using Index = int __attribute__((vector_size(kLanes * sizeof(int))));  // permutations of a Vec
 
 constexpr std::ptrdiff_t kMargin = 2;  // coarse samples kept beyond each end of a level
 constexpr int kMaxLevels = 4;          // f <= 16

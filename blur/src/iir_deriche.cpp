@@ -28,7 +28,7 @@ namespace tridiff::blur_detail {
 
 namespace {
 
-constexpr int kLanes = 16;  // one AVX-512 vector of floats
+constexpr int kLanes = kVectorLanes;
 
 // One real second-order section: y(n) = b0 x(n) + b1 x(n-1) - a1 y(n-1) - a2 y(n-2) for the causal
 // part, y(n) = b1 x(n+1) + b2 x(n+2) - a1 y(n+1) - a2 y(n+2) for the anticausal one.
@@ -70,16 +70,8 @@ Coefficients deriche_coefficients(double sigma) {
   return k;
 }
 
-// kLanes floats as one vector (GCC/Clang vector extension): the recursion state stays in registers,
-// one lane per signal.
-using Lanes = float __attribute__((vector_size(kLanes * sizeof(float))));
-
-inline Lanes load(const float* p) {
-  Lanes v;
-  __builtin_memcpy(&v, p, sizeof v);
-  return v;
-}
-inline void store(float* p, Lanes v) { __builtin_memcpy(p, &v, sizeof v); }
+// kLanes signals in one vector: the recursion state stays in registers, one lane per signal.
+using Lanes = FloatVector;
 
 // The recursion state of kLanes signals between two stretches of a sweep: the last two inputs
 // (x(i-1), x(i-2) going forward, x(i+1), x(i+2) going back) and the last two outputs of each

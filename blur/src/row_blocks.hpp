@@ -12,6 +12,17 @@
 
 namespace tridiff::blur_detail {
 
+// One AVX-512 vector of floats (GCC/Clang vector extension: lowered to narrower vectors where
+// AVX-512 is missing), and unaligned loads and stores of it.
+inline constexpr int kVectorLanes = 16;
+using FloatVector = float __attribute__((vector_size(kVectorLanes * sizeof(float))));
+inline FloatVector load(const float* p) {
+  FloatVector v;
+  __builtin_memcpy(&v, p, sizeof v);
+  return v;
+}
+inline void store(float* p, FloatVector v) { __builtin_memcpy(p, &v, sizeof v); }
+
 // Scratch slots: for_each_row_block uses the first two itself, so the kernels it runs use
 // slots from kFreeScratchSlot on; code outside it (the column passes) may use any slot.
 inline constexpr int kRowBlockLanesSlot = 0;
