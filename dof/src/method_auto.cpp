@@ -165,7 +165,7 @@ std::string describe(const Candidate& c) {
 
 MethodChoice choose_dof_method(ConstPlane coc, const DofSettings& settings,
                                std::span<const MethodTableRow> table) {
-  const TileMap tiles(coc, std::max(1.f, settings.in_focus_coc_px), TileMap::kDefaultTile, 0,
+  const TileMap tiles(coc, sharp_below_px(settings.in_focus_coc_px), TileMap::kDefaultTile, 0,
                       settings.threads);
   std::vector<Candidate> candidates;
   std::string missing;

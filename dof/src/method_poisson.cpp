@@ -441,7 +441,7 @@ void run_poisson(Image& out, const Image& color, ConstPlane coc, const DofSettin
   const int team = detail::resolve_threads(settings.threads);
   const std::ptrdiff_t width = color.width(), height = color.height();
   const int channels = color.channels();
-  const float point_below = std::max(1.f, settings.in_focus_coc_px);
+  const float point_below = sharp_below_px(settings.in_focus_coc_px);
   using Clock = StageClock;
 
   auto start = Clock::now();

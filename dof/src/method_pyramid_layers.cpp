@@ -161,7 +161,7 @@ void run_pyramid_layers(Image& out, const Image& color, ConstPlane coc,
   const int team = detail::resolve_threads(settings.threads);
   const std::ptrdiff_t width = color.width(), height = color.height();
   const int channels = color.channels();
-  const float sharp_below = std::max(1.f, settings.in_focus_coc_px);
+  const float sharp_below = sharp_below_px(settings.in_focus_coc_px);
   const bool skip = settings.skip_in_focus;
   using Clock = StageClock;
 

@@ -248,7 +248,7 @@ Common prepare(Image& out, const Image& color, ConstPlane coc, const DofSettings
   validate_dof_input(color, coc);
   const auto start = Clock::now();
   const int team = detail::resolve_threads(settings.threads);
-  const float sharp_below = std::max(1.f, settings.in_focus_coc_px);
+  const float sharp_below = sharp_below_px(settings.in_focus_coc_px);
   Common common{team, sharp_below,
                 TileMap(coc, sharp_below, TileMap::kDefaultTile, kHalfResMargin, team),
                 settings.skip_in_focus};

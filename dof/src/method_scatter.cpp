@@ -57,6 +57,7 @@
 #include <vector>
 
 #include "tridiff/dof/method.hpp"
+#include "tridiff/dof/tiles.hpp"
 #include "tridiff/solvers/solve.hpp"
 #include "stage_clock.hpp"
 
@@ -152,7 +153,7 @@ void run_scatter(Image& out, const Image& color, ConstPlane coc, const DofSettin
   const int team = detail::resolve_threads(settings.threads);
   const std::ptrdiff_t width = color.width(), height = color.height();
   const int channels = color.channels();
-  const float point_below = std::max(1.f, settings.in_focus_coc_px);
+  const float point_below = sharp_below_px(settings.in_focus_coc_px);
   if (width * height > std::numeric_limits<std::int32_t>::max())
     throw InvalidArgument("color", -1, -1, "has more than 2^31 pixels");
   // A disc beyond kMaxDiameter px would take hours; refuse it rather than clamp it silently.

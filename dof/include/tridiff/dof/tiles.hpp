@@ -8,6 +8,7 @@
 // front of the focus. A pixel is sharp when |c| < in_focus_coc_px; its blur radius is |c| / 2.
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <vector>
 
@@ -33,6 +34,10 @@ struct TileInfo {
   float near_reach_radius = 0;  // the same over near (c < 0) pixels only
   TileKind kind = TileKind::sharp;
 };
+
+// The CoC (px) from which a pixel counts as out of focus for the gather and scatter methods:
+// the setting, but never below one pixel (a disc under one pixel is a point).
+inline float sharp_below_px(float in_focus_coc_px) { return std::max(1.f, in_focus_coc_px); }
 
 class TileMap {
  public:
