@@ -1034,5 +1034,117 @@ TEST(Diffusion, ThreadsDoNotChangeTheResult) {
   }
 }
 
+// ---------------------------------------------------------------------------------------------
+// 13. Conductances given per pixel (diffuse_adi(dst, src, value, to_link)): the links are the
+// smaller end of each pair, computed as the solves read them. The references are the dense
+// solves of the same systems; the links for them come from links_from_pixels.
+
+// A per-pixel value in [0, 3) with whole 64 x 64 tiles and scattered pixels at zero (sharp).
+Image sharp_and_blurred(Size size, std::uint64_t seed) {
+  Image value = random_image(size, 1, seed);
+  std::mt19937_64 random(seed + 1);
+  std::uniform_real_distribution<float> uniform(0.f, 1.f);
+  for (std::ptrdiff_t y = 0; y < size.height; ++y)
+    for (std::ptrdiff_t x = 0; x < size.width; ++x) {
+      const bool sharp_tile = (x / kTile + 2 * (y / kTile)) % 3 == 1;
+      value(x, y, 0) = sharp_tile || uniform(random) < 0.1f ? 0.f : 3.f * value(x, y, 0);
+    }
+  return value;
+}
+
+// The DOF map: nothing below one pixel, a quadratic above.
+float dof_like_link(float v) { return std::abs(v) < 1.f ? 0.f : v * v * 0.75f; }
+
+TEST(Diffusion, AdiFromPixelsMatchesDenseSolve) {
+  // Every plane grouping (the solves take up to three planes at once): 1, 2, 3, 3 + 1, 3 + 2.
+  for (const Size size : kSmallDenseSizes)
+    for (const int channels : {1, 2, 3, 4, 5}) {
+      SCOPED_TRACE(name(size) + ", " + std::to_string(channels) + " channels");
+      const Image value = sharp_and_blurred(size, 131);
+      const Image src = random_image(size, channels, 132);
+      const LinkField links = links_from_pixels(value.plane(0), dof_like_link);
+      Image dst;
+      diffuse_adi(dst, src, value.plane(0), dof_like_link);
+      expect_matches(dst, reference_image(src, links), max_abs(src));
+    }
+}
+
+TEST(Diffusion, AdiFromPixelsSkipsExactlyAndAgreesAcrossThreads) {
+  for (const Size size : kSizes) {
+    SCOPED_TRACE(name(size));
+    const Image value = sharp_and_blurred(size, 133);
+    const Image src = random_image(size, 3, 134);
+    Image skipped, full, two_threads, in_place = src;
+    const DiffusionReport report =
+        diffuse_adi(skipped, src, value.plane(0), dof_like_link, with_skip(true, 1));
+    diffuse_adi(full, src, value.plane(0), dof_like_link, with_skip(false, 1));
+    diffuse_adi(two_threads, src, value.plane(0), dof_like_link, with_skip(true, 2));
+    diffuse_adi(in_place, in_place, value.plane(0), dof_like_link, with_skip(true, 2));
+    EXPECT_EQ(first_bit_difference(skipped, full), "");
+    EXPECT_EQ(first_bit_difference(two_threads, full), "");
+    EXPECT_EQ(first_bit_difference(in_place, full), "");
+    // The same bits as the LinkField path, which has its own tests against dense solves.
+    Image from_links;
+    diffuse_adi(from_links, src, links_from_pixels(value.plane(0), dof_like_link), with_skip(false));
+    EXPECT_EQ(first_bit_difference(from_links, full), "");
+    if (size.width >= 3 * kTile && size.height >= 2 * kTile) {
+      EXPECT_GT(report.skipped_fraction(), 0.05);  // the sharp tiles
+    }
+  }
+}
+
+TEST(Diffusion, AdiFromPixelsSolvesNothingInASharpFrame) {
+  const Size size{200, 150};
+  const Image src = random_image(size, 3, 135);
+  const Image value(size.width, size.height, 1);  // every pixel 0: insulated
+  Image dst;
+  const DiffusionReport report = diffuse_adi(dst, src, value.plane(0), dof_like_link);
+  EXPECT_EQ(report.pixels_solved, 0);
+  EXPECT_EQ(first_bit_difference(dst, src), "");
+}
+
+// A bad conductance anywhere is named, also where a link's other end would hide it (a NaN at
+// the last pixel of a row only enters the link min(k(x - 1), NaN), whose value is k(x - 1)).
+TEST(Diffusion, AdiFromPixelsNamesBadConductanceAndBadPixel) {
+  const Size size{130, 70};
+  struct Case {
+    std::ptrdiff_t x, y;
+    float value;
+  };
+  const float nan = kNaN, inf = std::numeric_limits<float>::infinity();
+  for (const Case c : {Case{129, 69, nan}, Case{0, 0, inf}, Case{64, 30, -2.f},
+                       Case{129, 3, nan}, Case{5, 69, nan}})
+    for (const bool skip : {true, false}) {
+      SCOPED_TRACE(pixel(c.x, c.y) + " value " + std::to_string(c.value) +
+                   (skip ? ", skipping" : ", full solve"));
+      Image value = sharp_and_blurred(size, 136);
+      value(c.x, c.y, 0) = c.value;
+      const Image src = random_image(size, 3, 137);
+      Image dst;
+      const auto negative_is_bad = [](float v) { return v < 0 ? v : dof_like_link(v); };
+      const Thrown thrown = invalid_argument_of(
+          [&] { diffuse_adi(dst, src, value.plane(0), negative_is_bad, with_skip(skip)); });
+      EXPECT_EQ(thrown.argument, "value");
+      EXPECT_TRUE(contains(thrown.message, pixel(c.x, c.y))) << thrown.message;
+    }
+  // A non-finite colour value where the frame is blurred, and where it is sharp.
+  for (const bool sharp : {false, true}) {
+    const Image value = sharp ? Image(size.width, size.height, 1) : sharp_and_blurred(size, 138);
+    Image src = random_image(size, 3, 139);
+    src(100, 7, 2) = kNaN;
+    Image dst;
+    const Thrown thrown =
+        invalid_argument_of([&] { diffuse_adi(dst, src, value.plane(0), dof_like_link); });
+    EXPECT_EQ(thrown.argument, "src");
+    EXPECT_TRUE(contains(thrown.message, pixel(100, 7))) << thrown.message;
+  }
+  const Image wrong_size(size.width + 1, size.height, 1);
+  Image dst;
+  EXPECT_EQ(invalid_argument_of([&] {
+              diffuse_adi(dst, random_image(size, 3, 140), wrong_size.plane(0), dof_like_link);
+            }).argument,
+            "value");
+}
+
 }  // namespace
 }  // namespace tridiff::test

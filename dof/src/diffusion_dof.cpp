@@ -24,26 +24,17 @@ auto timed(DofReport& report, const char* name, Work&& work) {
   return work();
 }
 
-// Uniform links of conductance beta everywhere (the fill of hidden background).
-LinkField uniform_links(std::ptrdiff_t width, std::ptrdiff_t height, float beta) {
-  LinkField links(width, height);
-  for (Plane p : {links.horizontal(), links.vertical()})
-    for (std::ptrdiff_t y = 0; y < p.height(); ++y) std::fill(p.row(y), p.row(y) + p.width(), beta);
-  links.finish();
-  return links;
-}
-
 // Normalised diffusion ("push-pull" by heat): diffuses value*weight and weight, then returns
 // the ratio where weight is zero and the value itself elsewhere. Fills holes (weight 0) with
 // a smooth average of the surrounding known values. planes: value channels then the weight.
 void fill_holes(Image& premultiplied, const Image& original, float fill_beta, int threads) {
   const int values = premultiplied.channels() - 1;
-  const LinkField links =
-      uniform_links(premultiplied.width(), premultiplied.height(), fill_beta);
   DiffusionOptions options;
   options.threads = threads;
   Image diffused;
-  diffuse_adi(diffused, premultiplied, links, options);
+  const ConstPlane any_plane = premultiplied.plane(0);  // the conductance is uniform
+  diffuse_adi(diffused, premultiplied, any_plane, [fill_beta](float) { return fill_beta; },
+              options);
   const ConstPlane known = premultiplied.plane(values), spread = diffused.plane(values);
   for (int c = 0; c < values; ++c) {
     Plane out = premultiplied.plane(c);
@@ -101,11 +92,10 @@ void layered_dof(Image& out, const Image& color, ConstPlane coc, const DofSettin
   });
   Image background_blur(width, height, channels);
   timed(report, "background blur", [&] {
-    const LinkField links =
-        coc_links(background.plane(channels), settings.in_focus_coc_px, settings.threads);
     Image colour_only(width, height, channels);
     for (int c = 0; c < channels; ++c) copy_plane(background.plane(c), colour_only.plane(c));
-    diffusion += diffuse(background_blur, colour_only, links, options);
+    diffusion += diffuse(background_blur, colour_only, background.plane(channels),
+                         settings.in_focus_coc_px, options);
   });
 
   // Near field: premultiplied colour and coverage, spreading out with its own CoC.
@@ -122,9 +112,8 @@ void layered_dof(Image& out, const Image& color, ConstPlane coc, const DofSettin
         near_layer(x, y, channels) = inside;
       }
     fill_holes(near_coc, near_coc_original, fill_beta, settings.threads);
-    const LinkField links =
-        coc_links(near_coc.plane(0), settings.in_focus_coc_px, settings.threads);
-    diffusion += diffuse(near_layer, near_layer, links, options);
+    diffusion +=
+        diffuse(near_layer, near_layer, near_coc.plane(0), settings.in_focus_coc_px, options);
   });
 
   timed(report, "composite", [&] {
@@ -143,13 +132,7 @@ void layered_dof(Image& out, const Image& color, ConstPlane coc, const DofSettin
 }  // namespace
 
 LinkField coc_links(ConstPlane coc, float in_focus_px, int threads) {
-  return links_from_pixels(
-      coc,
-      [in_focus_px](float coc_px) {
-        const float diameter = std::abs(coc_px);
-        return diameter < in_focus_px ? 0.f : adi_beta_for_coc(diameter);
-      },
-      threads);
+  return links_from_pixels(coc, CocConductance{in_focus_px}, threads);
 }
 
 void diffusion_dof(Image& out, const Image& color, ConstPlane coc, const DofSettings& settings,
@@ -165,11 +148,9 @@ void diffusion_dof(Image& out, const Image& color, ConstPlane coc, const DofSett
   // The colour is checked by the diffuser where it passes (see Diffuser).
   validate_coc(color, coc);
 
-  const LinkField links = timed(report, "links", [&] {
-    return coc_links(coc, settings.in_focus_coc_px, settings.threads);
+  const DiffusionReport diffusion = timed(report, "diffusion", [&] {
+    return diffuse(out, color, coc, settings.in_focus_coc_px, options);
   });
-  const DiffusionReport diffusion =
-      timed(report, "diffusion", [&] { return diffuse(out, color, links, options); });
   report.skipped_fraction = diffusion.skipped_fraction();
 }
 

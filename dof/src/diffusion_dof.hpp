@@ -2,6 +2,7 @@
 // the CoC, and the optional near-field layer of Kass, Lefohn & Owens (2006).
 #pragma once
 
+#include <cmath>
 #include <functional>
 
 #include "tridiff/diffusion/adi.hpp"
@@ -10,14 +11,23 @@
 
 namespace tridiff::dof_detail {
 
-// A diffusion operator: dst = diffuse(src) with link conductances beta (dst may be src). It
-// must reject non-finite values of src (diffuse_adi does as it solves and copies; explicit
-// methods check src first).
-using Diffuser = std::function<DiffusionReport(Image& dst, const Image& src,
-                                               const LinkField& beta, const DiffusionOptions&)>;
+// The conductance of a pixel of CoC diameter |coc_px|: adi_beta_for_coc, or zero (the pixel
+// insulates itself) below `in_focus_px`. Links take the smaller of their two ends.
+struct CocConductance {
+  float in_focus_px;
+  float operator()(float coc_px) const {
+    const float diameter = std::abs(coc_px);
+    return diameter < in_focus_px ? 0.f : adi_beta_for_coc(diameter);
+  }
+};
 
-// Links beta = min over the two pixels of adi_beta_for_coc(|CoC|); pixels with |CoC| below
-// `in_focus_px` count as sharp (CoC 0) and insulate themselves.
+// A diffusion operator: dst = diffuse(src) with the conductances CocConductance{in_focus_px}
+// of the CoC plane `coc` (dst may be src). It must reject non-finite values of src
+// (diffuse_adi does as it solves and copies; explicit methods check src first).
+using Diffuser = std::function<DiffusionReport(Image& dst, const Image& src, ConstPlane coc,
+                                               float in_focus_px, const DiffusionOptions&)>;
+
+// The links of CocConductance{in_focus_px} as a LinkField (for the explicit methods).
 LinkField coc_links(ConstPlane coc, float in_focus_px, int threads);
 
 void diffusion_dof(Image& out, const Image& color, ConstPlane coc, const DofSettings& settings,

@@ -11,8 +11,9 @@ void run_mpad(Image& out, const Image& color, ConstPlane coc, const DofSettings&
               DofReport& report) {
   int steps = 0;
   diffusion_dof(out, color, coc, settings, report,
-                [&steps](Image& dst, const Image& src, const LinkField& beta,
+                [&steps](Image& dst, const Image& src, ConstPlane coc, float in_focus_px,
                          const DiffusionOptions& options) {
+                  const LinkField beta = coc_links(coc, in_focus_px, options.threads);
                   int taken = 0;
                   DiffusionReport r = diffuse_explicit(dst, src, beta, options, &taken);
                   steps = std::max(steps, taken);

@@ -50,6 +50,15 @@ DiffusionReport diffuse_rows(Plane dst, ConstPlane src, const LinkField& beta,
 DiffusionReport diffuse_columns(Plane dst, ConstPlane src, const LinkField& beta,
                                 const DiffusionOptions& options = {});
 
+// One ADI step with the conductances given per pixel: the link between neighbours a and b
+// conducts min(to_link(value(a)), to_link(value(b))), the links links_from_pixels builds, but
+// computed as the solves read them, with no LinkField written, checked and read back (a third
+// of the work of a DOF step). Every to_link(value) must be finite and >= 0: InvalidArgument
+// naming the pixel ("value") otherwise. value has the size of src.
+template <class ToLink>
+DiffusionReport diffuse_adi(Image& dst, const Image& src, ConstPlane value, ToLink to_link,
+                            const DiffusionOptions& options = {});
+
 // The conductance beta that makes one ADI step spread a region of uniform circle of confusion
 // like the disc itself: a disc of diameter D has variance D^2/16 along each axis, one implicit
 // pass of conductance beta has variance 2 beta, so beta = D^2 / 32.
@@ -58,3 +67,5 @@ inline float adi_beta_for_coc(float coc_diameter_px) {
 }
 
 }  // namespace tridiff
+
+#include "tridiff/diffusion/detail/adi_impl.hpp"

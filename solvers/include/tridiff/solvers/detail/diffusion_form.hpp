@@ -35,19 +35,21 @@ void diffusion_thomas(std::ptrdiff_t n, Strided<const real_t<T>> beta, Strided<c
   for (std::ptrdiff_t i = n - 2; i >= 0; --i) x[i] += work[i] * x[i + 1];
 }
 
-// Reals of workspace DiffusionLanes needs.
+// Reals of workspace DiffusionLanes<T, W, rhs> needs.
 template <class T>
-constexpr std::ptrdiff_t diffusion_lanes_workspace(std::ptrdiff_t n, int lanes) {
-  return n * lanes * (1 + std::ptrdiff_t(sizeof(T) / sizeof(real_t<T>)));
+constexpr std::ptrdiff_t diffusion_lanes_workspace(std::ptrdiff_t n, int lanes, int rhs = 1) {
+  return n * lanes * (1 + rhs * std::ptrdiff_t(sizeof(T) / sizeof(real_t<T>)));
 }
 
 // The same elimination on W systems at once, one SIMD lane each, fed block by block so that a
-// driver can transpose image rows into lanes a few columns at a time (all in L1).
-// The forward sweep keeps its results in `work` (the eliminated right-hand side and the
+// driver can transpose image rows into lanes a few columns at a time (all in L1). Each system
+// has `Rhs` right-hand sides (LAPACK's NRHS: the colour planes of one image) that share the
+// factorisation, so its division and its beta are paid once for all of them.
+// The forward sweep keeps its results in `work` (the eliminated right-hand sides and the
 // multipliers), so x is written once, by the backward sweep, and only after the forward sweep
 // found beta >= 0 and finite and the eliminated rhs finite; x is then a convex combination
 // of the rhs and cannot overflow. In-place solves (x == d) are therefore safe.
-template <class T, int W>
+template <class T, int W, int Rhs = 1>
 class DiffusionLanes {
   using R = real_t<T>;
   static_assert(!is_complex_v<T> || sizeof(T) == 2 * sizeof(R));
@@ -58,95 +60,109 @@ class DiffusionLanes {
     for (int l = 0; l < W; ++l) {
       beta_before_[l] = 0;
       e_before_[l] = 1;
-      min_beta_[l] = 0;
       probe_[l] = 0;
-      carry_[l] = T(0);
+      for (int c = 0; c < Rhs; ++c) carry_[c][l] = T(0);
     }
   }
 
-  // Rows [begin, end) in increasing order; beta and rhs of row i at (i - begin) * stride + lane.
-  void forward(std::ptrdiff_t begin, std::ptrdiff_t end, const R* beta, const T* d,
-               std::ptrdiff_t stride) {
+  // Rows [begin, end) in increasing order. Row i's beta is at (i - begin) * beta_stride + lane,
+  // its right-hand side c at (i - begin) * stride + c * plane_stride + lane.
+  void forward(std::ptrdiff_t begin, std::ptrdiff_t end, const R* beta, std::ptrdiff_t beta_stride,
+               const T* d, std::ptrdiff_t stride, std::ptrdiff_t plane_stride) {
     // Work on local copies of the state: the compiler then keeps it in registers, as it
     // cannot prove that the stores through w and e leave the members alone.
-    R beta_before[W], e_before[W], min_beta[W], probe[W];
-    T carry[W];
-    load_state(beta_before, e_before, min_beta, probe, carry);
+    R beta_before[W], e_before[W], probe[W];
+    T carry[Rhs][W];
+    load_state(beta_before, e_before, probe, carry);
     for (std::ptrdiff_t i = begin; i < end; ++i) {
-      const std::ptrdiff_t row = (i - begin) * stride;
+      const R* b = beta + (i - begin) * beta_stride;
+      const T* rhs = d + (i - begin) * stride;
       const bool has_link = i + 1 < n_;  // beta[n-1] is not part of the system
       R* w = multipliers_ + i * W;
-      T* e = eliminated_ + i * W;
+      T* e = eliminated_ + i * Rhs * W;
 #pragma omp simd
       for (int l = 0; l < W; ++l) {
-        const R beta_here = has_link ? beta[row + l] : R(0);
+        const R beta_here = has_link ? b[l] : R(0);
         const R g = 1 + beta_before[l] * e_before[l];
         const R inverse = 1 / (g + beta_here);
-        const T value = (d[row + l] + beta_before[l] * carry[l]) * inverse;
-        e[l] = value;
-        carry[l] = value;
+        R zero_if_finite = 0;
+        for (int c = 0; c < Rhs; ++c) {
+          const T value = (rhs[c * plane_stride + l] + beta_before[l] * carry[c][l]) * inverse;
+          e[c * W + l] = value;
+          carry[c][l] = value;
+          zero_if_finite += magnitude(value) * 0;
+        }
         w[l] = beta_here * inverse;
         e_before[l] = g * inverse;
         beta_before[l] = beta_here;
-        min_beta[l] = std::min(min_beta[l], beta_here);
-        probe[l] += beta_here * 0 + magnitude(value) * 0;
+        // Zero while beta and the values are finite and beta >= 0 (one accumulator, not two:
+        // with three right-hand sides of 4 vectors each, registers are short).
+        probe[l] += beta_here * 0 + zero_if_finite + (beta_here < 0 ? R(1) : R(0));
       }
     }
-    store_state(beta_before, e_before, min_beta, probe, carry);
+    store_state(beta_before, e_before, probe, carry);
+  }
+
+  // One right-hand side, beta and rhs of row i at (i - begin) * stride + lane.
+  void forward(std::ptrdiff_t begin, std::ptrdiff_t end, const R* beta, const T* d,
+               std::ptrdiff_t stride) {
+    static_assert(Rhs == 1);
+    forward(begin, end, beta, stride, d, stride, 0);
   }
 
   // After the whole forward sweep: were beta and the rhs valid in every lane?
   bool healthy() const {
     bool ok = true;
-    for (int l = 0; l < W; ++l) ok = ok && min_beta_[l] >= 0 && probe_[l] == 0;
+    for (int l = 0; l < W; ++l) ok = ok && probe_[l] == 0;
     return ok;
   }
 
-  // Rows [begin, end) in decreasing order, called from the last block to the first; the
-  // solution of row i goes to x + (i - begin) * stride + lane.
-  void backward(std::ptrdiff_t begin, std::ptrdiff_t end, T* x, std::ptrdiff_t stride) {
-    T carry[W];
-    for (int l = 0; l < W; ++l) carry[l] = carry_[l];
+  // Rows [begin, end) in decreasing order, called from the last block to the first; solution c
+  // of row i goes to x + (i - begin) * stride + c * plane_stride + lane.
+  void backward(std::ptrdiff_t begin, std::ptrdiff_t end, T* x, std::ptrdiff_t stride,
+                std::ptrdiff_t plane_stride = 0) {
+    T carry[Rhs][W];
+    for (int c = 0; c < Rhs; ++c)
+      for (int l = 0; l < W; ++l) carry[c][l] = carry_[c][l];
     for (std::ptrdiff_t i = end - 1; i >= begin; --i) {
       const R* w = multipliers_ + i * W;
-      const T* e = eliminated_ + i * W;
+      const T* e = eliminated_ + i * Rhs * W;
       T* out = x + (i - begin) * stride;
       const bool last = i == n_ - 1;
 #pragma omp simd
-      for (int l = 0; l < W; ++l) {
-        carry[l] = last ? e[l] : e[l] + w[l] * carry[l];
-        out[l] = carry[l];
-      }
+      for (int l = 0; l < W; ++l)
+        for (int c = 0; c < Rhs; ++c) {
+          carry[c][l] = last ? e[c * W + l] : e[c * W + l] + w[l] * carry[c][l];
+          out[c * plane_stride + l] = carry[c][l];
+        }
     }
-    for (int l = 0; l < W; ++l) carry_[l] = carry[l];
+    for (int c = 0; c < Rhs; ++c)
+      for (int l = 0; l < W; ++l) carry_[c][l] = carry[c][l];
   }
 
  private:
-  void load_state(R* beta_before, R* e_before, R* min_beta, R* probe, T* carry) const {
+  void load_state(R* beta_before, R* e_before, R* probe, T (*carry)[W]) const {
     for (int l = 0; l < W; ++l) {
       beta_before[l] = beta_before_[l];
       e_before[l] = e_before_[l];
-      min_beta[l] = min_beta_[l];
       probe[l] = probe_[l];
-      carry[l] = carry_[l];
+      for (int c = 0; c < Rhs; ++c) carry[c][l] = carry_[c][l];
     }
   }
-  void store_state(const R* beta_before, const R* e_before, const R* min_beta, const R* probe,
-                   const T* carry) {
+  void store_state(const R* beta_before, const R* e_before, const R* probe, const T (*carry)[W]) {
     for (int l = 0; l < W; ++l) {
       beta_before_[l] = beta_before[l];
       e_before_[l] = e_before[l];
-      min_beta_[l] = min_beta[l];
       probe_[l] = probe[l];
-      carry_[l] = carry[l];
+      for (int c = 0; c < Rhs; ++c) carry_[c][l] = carry[c][l];
     }
   }
 
   std::ptrdiff_t n_;
   R* multipliers_;  // beta_i / m_i  (= -c'_i)
-  T* eliminated_;   // d'_i
-  R beta_before_[W], e_before_[W], min_beta_[W], probe_[W];
-  T carry_[W];  // forward: d'_{i-1}; backward: x_{i+1}
+  T* eliminated_;   // d'_i, the Rhs right-hand sides of row i side by side
+  R beta_before_[W], e_before_[W], probe_[W];
+  T carry_[Rhs][W];  // forward: d'_{i-1}; backward: x_{i+1}
 };
 
 // Lane-contiguous systems (equation i of lane l at i * row_stride + l). Returns false, with x

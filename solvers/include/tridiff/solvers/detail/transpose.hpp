@@ -128,6 +128,58 @@ inline void transpose_from_lanes(const T* block, std::ptrdiff_t columns, T* rows
                                   rows + k, pitch);
 }
 
+// block[k * W + l] = rows[l][x + k] for k < columns, l < W: W rows anywhere in memory (a band
+// of image rows, with a spare row standing in for rows past the image). Each row is fetched
+// four cache lines ahead, as in transpose_into_lanes.
+template <class T, int W>
+inline void gather_into_lanes(const T* const* rows, std::ptrdiff_t x, std::ptrdiff_t columns,
+                              T* block) {
+  constexpr std::ptrdiff_t kAhead = 4 * 64 / sizeof(T);
+  for (std::ptrdiff_t k = 0; k < columns; k += 16) {
+    const std::ptrdiff_t width = std::min<std::ptrdiff_t>(16, columns - k);
+    if (k + kAhead < columns)
+      for (int l = 0; l < W; ++l) __builtin_prefetch(rows[l] + x + k + kAhead);
+#if defined(__AVX512F__)
+    if constexpr (std::is_same_v<T, float> && W % 16 == 0) {
+      const __mmask16 mask = first_columns(width);
+      for (int group = 0; group < W; group += 16) {
+        __m512 r[16];
+        for (int j = 0; j < 16; ++j) r[j] = _mm512_maskz_loadu_ps(mask, rows[group + j] + x + k);
+        transpose_16x16(r);
+        for (std::ptrdiff_t j = 0; j < width; ++j) _mm512_storeu_ps(block + (k + j) * W + group, r[j]);
+      }
+      continue;
+    }
+#endif
+    for (int l = 0; l < W; ++l)
+      for (std::ptrdiff_t j = 0; j < width; ++j) block[(k + j) * W + l] = rows[l][x + k + j];
+  }
+}
+
+// rows[l][x + k] = block[k * W + l] for k < columns, l < W.
+template <class T, int W>
+inline void scatter_from_lanes(const T* block, std::ptrdiff_t columns, T* const* rows,
+                               std::ptrdiff_t x) {
+  for (std::ptrdiff_t k = 0; k < columns; k += 16) {
+    const std::ptrdiff_t width = std::min<std::ptrdiff_t>(16, columns - k);
+#if defined(__AVX512F__)
+    if constexpr (std::is_same_v<T, float> && W % 16 == 0) {
+      const __mmask16 mask = first_columns(width);
+      for (int group = 0; group < W; group += 16) {
+        __m512 r[16];
+        for (std::ptrdiff_t j = 0; j < 16; ++j)
+          r[j] = j < width ? _mm512_loadu_ps(block + (k + j) * W + group) : _mm512_setzero_ps();
+        transpose_16x16(r);
+        for (int j = 0; j < 16; ++j) _mm512_mask_storeu_ps(rows[group + j] + x + k, mask, r[j]);
+      }
+      continue;
+    }
+#endif
+    for (int l = 0; l < W; ++l)
+      for (std::ptrdiff_t j = 0; j < width; ++j) rows[l][x + k + j] = block[(k + j) * W + l];
+  }
+}
+
 }  // namespace tridiff::detail
 
 #if defined(__GNUC__) && !defined(__clang__)

@@ -1,0 +1,498 @@
+// The ADI passes, written once for every source of link conductances (a LinkField, or a
+// per-pixel value mapped to a conductance as the solve reads it).
+//
+// A band of kTile rows (or columns) is one SIMD batch of diffusion-form solves, one lane per
+// row (column). Every colour plane is a right-hand side of the same factorisation (up to
+// kMaxRhs at a time), so the division and the conductances are paid once per pixel, not once
+// per plane. Inside a band only the runs of tiles with a non-zero link are solved; the rest
+// is copied.
+#pragma once
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <exception>
+#include <limits>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "tridiff/solvers/solve.hpp"
+
+namespace tridiff::adi_detail {
+
+inline constexpr std::ptrdiff_t kTile = LinkField::kTile;
+inline constexpr int kLanes = int(kTile);  // one band is one batch
+static_assert(kLanes == detail::kLanes<float>);
+// Right-hand sides solved together: three planes of 4 vectors of carried values, with the
+// factorisation's state, still fit the 32 vector registers.
+inline constexpr int kMaxRhs = 3;
+inline constexpr std::ptrdiff_t kBlock = detail::kTransposeBlock;
+// Rows solved side by side in the rows pass, and columns in the columns pass (a band is
+// solved in groups of them). Measured on 3840 x 2160 RGB, 2 threads: rows 16 lanes take twice
+// as long as 32 (one vector cannot hide the latency of the elimination), 32 and 64 the same
+// (32 keeps the elimination's workspace at half the size); columns 32 and 64 the same.
+inline constexpr std::ptrdiff_t kRowLanes = 32, kColumnLanes = 64;
+
+enum class Direction { Rows, Columns };
+
+// Planes of one image (or one plane on its own): plane c, row y at data + c * plane_stride +
+// y * pitch.
+template <class T>
+struct PlaneStack {
+  T* data;
+  std::ptrdiff_t width, height, pitch, plane_stride;
+  int count;
+  T* row(int c, std::ptrdiff_t y) const { return data + c * plane_stride + y * pitch; }
+};
+
+// A run of pixels [begin, end) along a band that forms one independent system.
+struct Segment {
+  std::ptrdiff_t begin, end;
+};
+
+// The runs of active tiles of one band, as pixel ranges. A run of tiles [t0, t1] covers the
+// links t0*kTile ... (t1+1)*kTile - 1, so its system spans pixels t0*kTile ... (t1+1)*kTile; the
+// links on either side are zero (they lie in inactive tiles or outside the image), so the
+// systems are exactly decoupled from the pixels around them.
+inline void find_segments(const std::vector<std::uint8_t>& active, std::ptrdiff_t extent,
+                          bool skip, std::vector<Segment>& segments) {
+  segments.clear();
+  if (!skip) {
+    segments.push_back({0, extent});
+    return;
+  }
+  const auto tiles = std::ptrdiff_t(active.size());
+  for (std::ptrdiff_t t = 0; t < tiles;) {
+    if (!active[t]) {
+      ++t;
+      continue;
+    }
+    const std::ptrdiff_t first = t;
+    while (t < tiles && active[t]) ++t;
+    segments.push_back({first * kTile, std::min(extent, t * kTile + 1)});
+  }
+}
+
+// What one thread keeps between bands (and calls: the pages stay mapped).
+struct BandScratch {
+  std::vector<Segment> segments;
+  std::vector<std::uint8_t> active;
+  std::vector<float> work, zeros, sink;
+  float* floats(std::size_t count) {
+    if (work.size() < count) work.resize(count);
+    return work.data();
+  }
+  // A row of zeros, and a row to write into and never read, as long as an image row (and the
+  // 16 floats a masked vector access may span past it).
+  const float* zero_row(std::ptrdiff_t width) {
+    if (zeros.size() < std::size_t(width + 16)) zeros.assign(width + 16, 0.f);
+    return zeros.data();
+  }
+  float* sink_row(std::ptrdiff_t width) {
+    if (sink.size() < std::size_t(width + 16)) sink.resize(width + 16);
+    return sink.data();
+  }
+};
+
+// Runs body(band, scratch) for every band in parallel; the first error (by band) is rethrown.
+template <class Body>
+void for_each_band(std::ptrdiff_t bands, int threads, Body&& body) {
+  std::exception_ptr error;
+  std::ptrdiff_t error_band = std::numeric_limits<std::ptrdiff_t>::max();
+  std::mutex guard;
+#pragma omp parallel num_threads(threads) if (threads > 1 && bands > 1)
+  {
+    static thread_local BandScratch scratch;
+#pragma omp for schedule(dynamic, 1)
+    for (std::ptrdiff_t band = 0; band < bands; ++band) {
+      try {
+        body(band, scratch);
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(guard);
+        if (band < error_band) {
+          error_band = band;
+          error = std::current_exception();
+        }
+      }
+    }
+  }
+  if (error) std::rethrow_exception(error);
+}
+
+[[noreturn]] inline void throw_not_finite(std::ptrdiff_t x, std::ptrdiff_t y) {
+  throw InvalidArgument("src", -1, -1,
+                        "pixel (" + std::to_string(x) + ", " + std::to_string(y) +
+                            "): is not finite");
+}
+
+// dst[0, n) = src[0, n); throws naming the pixel if a value is not finite (the solves check
+// the pixels they solve; this is the check of the ones they skip).
+inline void copy_finite(float* dst, const float* src, std::ptrdiff_t n, std::ptrdiff_t x0,
+                        std::ptrdiff_t y) {
+  float probe = 0;  // sum of 0 * value: zero unless a value is NaN or infinite
+#pragma omp simd reduction(+ : probe)
+  for (std::ptrdiff_t i = 0; i < n; ++i) {
+    dst[i] = src[i];
+    probe += 0.f * src[i];
+  }
+  if (probe == 0) return;
+  for (std::ptrdiff_t i = 0; i < n; ++i)
+    if (!std::isfinite(src[i])) throw_not_finite(x0 + i, y);
+}
+
+// A solve found a bad value somewhere in the rectangle [x0, x1) x [y0, y1): names the first
+// one, row by row (a conductance the source rejects, or a non-finite pixel of src).
+template <class Source>
+[[noreturn]] void throw_first_bad_pixel(const Source& source, const PlaneStack<const float>& src,
+                                        std::ptrdiff_t x0, std::ptrdiff_t x1, std::ptrdiff_t y0,
+                                        std::ptrdiff_t y1) {
+  for (std::ptrdiff_t y = y0; y < y1; ++y)
+    for (std::ptrdiff_t x = x0; x < x1; ++x) {
+      source.check_pixel(x, y);
+      for (int c = 0; c < src.count; ++c)
+        if (!std::isfinite(src.row(c, y)[x])) throw_not_finite(x, y);
+    }
+  throw NumericalError(-1, -1, "a diffusion solve failed on valid input");  // not reached
+}
+
+// The kLanes rows of a band of `count` rows from y0 in one plane, as row pointers; the lanes
+// past the band's last row point at `spare` (a row of zeros to read, or one nobody reads to
+// write).
+template <int W, class T>
+void band_rows(T* first_row, std::ptrdiff_t pitch, std::ptrdiff_t count, T* spare, T* rows[W]) {
+  for (std::ptrdiff_t l = 0; l < W; ++l) rows[l] = l < count ? first_row + l * pitch : spare;
+}
+
+inline std::size_t row_scratch_floats(std::ptrdiff_t n) {
+  return std::size_t(detail::diffusion_lanes_workspace<float>(n, kLanes, kMaxRhs) +
+                     (kBlock + 1) * kLanes * (1 + kMaxRhs));
+}
+
+// The rows pass of planes [c0, c0 + Rhs) over one segment of a band of `count` rows from y0.
+// Blocks of kBlock columns of the band's rows are transposed into lanes in L1, straight from
+// the image (each row prefetched ahead), and the solution goes back the same way.
+template <int W, int Rhs, class Source>
+void solve_row_segment(const Source& source, const PlaneStack<float>& dst,
+                       const PlaneStack<const float>& src, int c0, std::ptrdiff_t y0,
+                       std::ptrdiff_t count, Segment s, BandScratch& scratch) {
+  const std::ptrdiff_t n = s.end - s.begin;
+  float* work = scratch.floats(row_scratch_floats(n));
+  float* links = work + detail::diffusion_lanes_workspace<float>(n, W, Rhs);
+  float* block = links + (kBlock + 1) * W;  // Rhs planes of kBlock rows of lanes
+  const float* in[Rhs][W];
+  float* out[Rhs][W];
+  for (int c = 0; c < Rhs; ++c) {
+    band_rows<W>(src.row(c0 + c, y0), src.pitch, count, scratch.zero_row(src.width), in[c]);
+    band_rows<W>(dst.row(c0 + c, y0), dst.pitch, count, scratch.sink_row(src.width), out[c]);
+  }
+  detail::DiffusionLanes<float, W, Rhs> sweep(n, work);
+  for (std::ptrdiff_t begin = 0; begin < n; begin += kBlock) {
+    const std::ptrdiff_t columns = std::min(n, begin + kBlock) - begin;
+    source.template row_link_lanes<W>(y0, count, s.begin + begin, columns,
+                                      scratch.zero_row(src.width), links);
+    for (int c = 0; c < Rhs; ++c)
+      detail::gather_into_lanes<float, W>(in[c], s.begin + begin, columns, block + c * kBlock * W);
+    sweep.forward(begin, begin + columns, links, W, block, W, kBlock * W);
+  }
+  if (!sweep.healthy()) throw_first_bad_pixel(source, src, s.begin, s.end, y0, y0 + count);
+  for (std::ptrdiff_t begin = (n - 1) / kBlock * kBlock; begin >= 0; begin -= kBlock) {
+    const std::ptrdiff_t columns = std::min(n, begin + kBlock) - begin;
+    sweep.backward(begin, begin + columns, block, W, kBlock * W);
+    for (int c = 0; c < Rhs; ++c)
+      detail::scatter_from_lanes<float, W>(block + c * kBlock * W, columns, out[c], s.begin + begin);
+  }
+}
+
+// Asks for rows [y0, y1) of the band of kLanes columns from x0, in planes [c0, c0 + planes)
+// and in the source's links: the columns pass walks down 64-pixel-wide strips of several
+// planes at once, a pattern of short strided runs the hardware prefetchers do not follow
+// well; without this the solve waits on every row.
+template <int W, class Source>
+void prefetch_rows(const Source& source, const PlaneStack<const float>& src, int c0, int planes,
+                   std::ptrdiff_t x0, std::ptrdiff_t y0, std::ptrdiff_t y1) {
+  constexpr std::ptrdiff_t kLine = 64 / sizeof(float);
+  for (std::ptrdiff_t y = y0; y < y1; ++y) {
+    for (int c = c0; c < c0 + planes; ++c)
+      for (std::ptrdiff_t x = x0; x < x0 + W; x += kLine) __builtin_prefetch(src.row(c, y) + x);
+    source.prefetch_column_links(y, x0, W);
+  }
+}
+
+// The columns pass of planes [c0, c0 + Rhs) over one segment of a band of `count` columns
+// from x0. A full band is solved in place in the image (its lanes are contiguous); a partial
+// one (the right edge) through a copy padded with zeros.
+template <int W, int Rhs, class Source>
+void solve_column_segment(const Source& source, const PlaneStack<float>& dst,
+                          const PlaneStack<const float>& src, int c0, std::ptrdiff_t x0,
+                          std::ptrdiff_t count, Segment s, float* scratch) {
+  const std::ptrdiff_t n = s.end - s.begin;
+  float* work = scratch;
+  float* block_beta = work + detail::diffusion_lanes_workspace<float>(n, W, Rhs);
+  float* padded = block_beta + kBlock * W;  // partial bands: n rows of Rhs planes of W lanes
+  const bool full = count == W;
+  if (!full)
+    for (std::ptrdiff_t i = 0; i < n; ++i)
+      for (int c = 0; c < Rhs; ++c) {
+        float* to = padded + (i * Rhs + c) * W;
+        const float* from = src.row(c0 + c, s.begin + i) + x0;
+        std::copy(from, from + count, to);
+        std::fill(to + count, to + W, 0.f);
+      }
+  detail::DiffusionLanes<float, W, Rhs> sweep(n, work);
+  for (std::ptrdiff_t begin = 0; begin < n; begin += kBlock) {
+    const std::ptrdiff_t end = std::min(n, begin + kBlock);
+    if (full)
+      prefetch_rows<W>(source, src, c0, Rhs, x0, s.begin + end, s.begin + std::min(n, end + kBlock));
+    for (std::ptrdiff_t i = begin; i < end; ++i)
+      source.column_links(s.begin + i, x0, count, W, block_beta + (i - begin) * W);
+    if (full)
+      sweep.forward(begin, end, block_beta, W, src.row(c0, s.begin + begin) + x0, src.pitch,
+                    src.plane_stride);
+    else
+      sweep.forward(begin, end, block_beta, W, padded + begin * Rhs * W, Rhs * W, W);
+  }
+  if (!sweep.healthy()) throw_first_bad_pixel(source, src, x0, x0 + count, s.begin, s.end);
+  if (full) {
+    sweep.backward(0, n, dst.row(c0, s.begin) + x0, dst.pitch, dst.plane_stride);
+    return;
+  }
+  sweep.backward(0, n, padded, Rhs * W, W);
+  for (std::ptrdiff_t i = 0; i < n; ++i)
+    for (int c = 0; c < Rhs; ++c) {
+      const float* from = padded + (i * Rhs + c) * W;
+      std::copy(from, from + count, dst.row(c0 + c, s.begin + i) + x0);
+    }
+}
+
+inline std::size_t column_scratch_floats(std::ptrdiff_t n) {
+  return std::size_t(detail::diffusion_lanes_workspace<float>(n, kLanes, kMaxRhs) +
+                     kBlock * kLanes + n * kMaxRhs * kLanes);
+}
+
+// Calls solve<Rhs>(c0) for planes [c0, c0 + Rhs), in groups of at most kMaxRhs.
+template <class Solve>
+void for_each_plane_group(int planes, Solve&& solve) {
+  for (int c0 = 0; c0 < planes; c0 += kMaxRhs) {
+    const int group = std::min(kMaxRhs, planes - c0);
+    if (group == 3) solve.template operator()<3>(c0);
+    else if (group == 2) solve.template operator()<2>(c0);
+    else solve.template operator()<1>(c0);
+  }
+  static_assert(kMaxRhs == 3);
+}
+
+// One pass over every plane of the stacks (dst may be src).
+//
+// Source provides:
+//   void activity(Direction, std::ptrdiff_t band, std::vector<std::uint8_t>& active): per tile
+//     along the band, whether it may hold a non-zero link in that direction (a tile marked
+//     inactive must have none);
+//   void row_link_lanes(std::ptrdiff_t y0, std::ptrdiff_t count, std::ptrdiff_t x0,
+//     std::ptrdiff_t columns, const float* zero_row, float* lanes): lanes[k * kLanes + l] =
+//     the link (x0 + k, y0 + l)-(x0 + k + 1, y0 + l) for k < columns, zero at the border and
+//     for l >= count (zero_row: a row of zeros as long as the image's);
+//   void column_links(std::ptrdiff_t y, std::ptrdiff_t x0, std::ptrdiff_t count, float* out):
+//     the links (x, y)-(x, y + 1) for x in [x0, x0 + count), zero at the border, and zero in
+//     out[count, kLanes);
+//   void check_pixel(std::ptrdiff_t x, std::ptrdiff_t y): throws InvalidArgument naming the
+//     pixel if a conductance there is negative or not finite.
+template <class Source>
+DiffusionReport run_pass(Direction direction, const PlaneStack<float>& dst,
+                         const PlaneStack<const float>& src, const Source& source,
+                         const DiffusionOptions& options) {
+  const bool rows = direction == Direction::Rows;
+  const std::ptrdiff_t width = src.width, height = src.height;
+  const std::ptrdiff_t bands = ((rows ? height : width) + kTile - 1) / kTile;
+  const std::ptrdiff_t length = rows ? width : height;  // of one system
+  const bool in_place = dst.data == src.data;
+  std::vector<std::ptrdiff_t> solved(bands, 0);
+
+  for_each_band(bands, detail::resolve_threads(options.threads),
+                [&](std::ptrdiff_t band, BandScratch& scratch) {
+    const std::ptrdiff_t first = band * kTile;  // first row (rows) or column (columns)
+    const std::ptrdiff_t count = std::min(kTile, (rows ? height : width) - first);
+    source.activity(direction, band, scratch.active);
+    find_segments(scratch.active, length, options.skip_inactive, scratch.segments);
+    // Copies pixels [from, to) along every system of the band (the parts not solved).
+    auto copy_span = [&](std::ptrdiff_t from, std::ptrdiff_t to) {
+      if (in_place || to <= from) return;
+      for (int c = 0; c < src.count; ++c) {
+        if (rows)
+          for (std::ptrdiff_t y = first; y < first + count; ++y)
+            copy_finite(dst.row(c, y) + from, src.row(c, y) + from, to - from, from, y);
+        else
+          for (std::ptrdiff_t y = from; y < to; ++y)
+            copy_finite(dst.row(c, y) + first, src.row(c, y) + first, count, first, y);
+      }
+    };
+    std::ptrdiff_t copied_to = 0;
+    for (const Segment& s : scratch.segments) {
+      copy_span(copied_to, s.begin);
+      const std::ptrdiff_t n = s.end - s.begin;
+      if (rows) {
+        for (std::ptrdiff_t sub = 0; sub < count; sub += kRowLanes)
+          for_each_plane_group(src.count, [&]<int Rhs>(int c0) {
+            solve_row_segment<kRowLanes, Rhs>(source, dst, src, c0, first + sub,
+                                              std::min(kRowLanes, count - sub), s, scratch);
+          });
+      } else {
+        float* work = scratch.floats(column_scratch_floats(n));
+        for (std::ptrdiff_t sub = 0; sub < count; sub += kColumnLanes)
+          for_each_plane_group(src.count, [&]<int Rhs>(int c0) {
+            solve_column_segment<kColumnLanes, Rhs>(source, dst, src, c0, first + sub,
+                                                    std::min(kColumnLanes, count - sub), s, work);
+          });
+      }
+      solved[band] += n * count * src.count;
+      copied_to = s.end;
+    }
+    copy_span(copied_to, length);
+  });
+  DiffusionReport report{width * height * src.count, 0};
+  for (std::ptrdiff_t s : solved) report.pixels_solved += s;
+  return report;
+}
+
+inline void require_same_size(std::ptrdiff_t width, std::ptrdiff_t height, ConstPlane other,
+                              const char* what) {
+  if (other.width() != width || other.height() != height)
+    throw InvalidArgument(what, -1, -1,
+                          "is " + std::to_string(other.width()) + " x " +
+                              std::to_string(other.height()) + ", the source is " +
+                              std::to_string(width) + " x " + std::to_string(height));
+}
+
+inline PlaneStack<const float> stack_of(const Image& image) {
+  return {image.data(), image.width(), image.height(), image.pitch(), image.plane_stride(),
+          image.channels()};
+}
+inline PlaneStack<float> stack_of(Image& image) {
+  return {image.data(), image.width(), image.height(), image.pitch(), image.plane_stride(),
+          image.channels()};
+}
+
+// Both passes over every channel: rows from src into dst, then columns in place in dst.
+template <class Source>
+DiffusionReport run_adi(Image& dst, const Image& src, const Source& source,
+                        const DiffusionOptions& options) {
+  if (&dst != &src && (dst.width() != src.width() || dst.height() != src.height() ||
+                       dst.channels() != src.channels()))
+    dst.reset(src.width(), src.height(), src.channels());
+  DiffusionReport report = run_pass(Direction::Rows, stack_of(dst), stack_of(src), source, options);
+  if (options.progress) options.progress(0.5);
+  const Image& rows_done = dst;
+  report += run_pass(Direction::Columns, stack_of(dst), stack_of(rows_done), source, options);
+  if (options.progress) options.progress(1.0);
+  return report;
+}
+
+// Conductance per pixel, to_link(value(x, y)); a link conducts the smaller of its two ends.
+template <class ToLink>
+class PixelConductance {
+ public:
+  PixelConductance(ConstPlane value, ToLink to_link) : value_(value), to_link_(to_link) {}
+
+  void activity(Direction direction, std::ptrdiff_t band, std::vector<std::uint8_t>& active) const {
+    const std::ptrdiff_t width = value_.width(), height = value_.height();
+    const std::ptrdiff_t tiles_x = (width + kTile - 1) / kTile, tiles_y = (height + kTile - 1) / kTile;
+    const bool rows = direction == Direction::Rows;
+    active.assign(rows ? tiles_x : tiles_y, 0);
+    for (std::ptrdiff_t t = 0; t < std::ptrdiff_t(active.size()); ++t) {
+      const std::ptrdiff_t tx = rows ? t : band, ty = rows ? band : t;
+      active[t] = any_conductance(tx * kTile, std::min(width, (tx + 1) * kTile), ty * kTile,
+                                  std::min(height, (ty + 1) * kTile));
+    }
+  }
+
+  template <int W>
+  void row_link_lanes(std::ptrdiff_t y0, std::ptrdiff_t count, std::ptrdiff_t x0,
+                      std::ptrdiff_t columns, const float* zero_row, float* lanes) const {
+    const float* rows[W];
+    adi_detail::band_rows<W>(value_.row(y0), value_.pitch(), count, zero_row, rows);
+    // The conductances of columns [x0, x0 + columns] (the last one for the block's last link),
+    // as far as the image goes.
+    const std::ptrdiff_t known = std::min(columns + 1, value_.width() - x0);
+    detail::gather_into_lanes<float, W>(rows, x0, known, lanes);
+#pragma omp simd
+    for (std::ptrdiff_t i = 0; i < known * W; ++i) lanes[i] = to_link_(lanes[i]);
+    for (std::ptrdiff_t k = 0; k < columns; ++k) {
+      float* here = lanes + k * W;
+      const bool has_link = k + 1 < known;
+#pragma omp simd
+      for (int l = 0; l < W; ++l)
+        here[l] = has_link && l < count ? std::min(here[l], here[l + W]) : 0.f;
+    }
+  }
+
+  void column_links(std::ptrdiff_t y, std::ptrdiff_t x0, std::ptrdiff_t count, std::ptrdiff_t lanes,
+                    float* out) const {
+    std::ptrdiff_t filled = 0;
+    if (y + 1 < value_.height()) {
+      const float* here = value_.row(y) + x0;
+      const float* below = value_.row(y + 1) + x0;
+#pragma omp simd
+      for (std::ptrdiff_t l = 0; l < count; ++l)
+        out[l] = std::min(to_link_(here[l]), to_link_(below[l]));
+      filled = count;
+    }
+    std::fill(out + filled, out + lanes, 0.f);
+  }
+
+  void prefetch_column_links(std::ptrdiff_t y, std::ptrdiff_t x0, std::ptrdiff_t lanes) const {
+    if (y + 1 >= value_.height()) return;
+    for (std::ptrdiff_t x = x0; x < x0 + lanes; x += 16) __builtin_prefetch(value_.row(y + 1) + x);
+  }
+
+  void check_pixel(std::ptrdiff_t x, std::ptrdiff_t y) const {
+    const float k = to_link_(value_(x, y));
+    if (!(k >= 0) || !std::isfinite(k))
+      throw InvalidArgument("value", -1, -1,
+                            "pixel (" + std::to_string(x) + ", " + std::to_string(y) + "): " +
+                                std::to_string(value_(x, y)) + " maps to conductance " +
+                                std::to_string(k) + "; it must be finite and >= 0");
+  }
+
+ private:
+  // Whether any pixel of [x0, x1) x [y0, y1) has a conductance other than zero. Every
+  // conductance is checked on the way (the links take the smaller of two ends, which could
+  // hide a NaN at the border): InvalidArgument naming the first bad pixel.
+  bool any_conductance(std::ptrdiff_t x0, std::ptrdiff_t x1, std::ptrdiff_t y0,
+                       std::ptrdiff_t y1) const {
+    // On the bit patterns: +0 and -0 are the zeros; a valid conductance is below the
+    // pattern of +infinity; anything else with the sign bit is negative or NaN.
+    constexpr std::uint32_t kInfinity = 0x7f800000u, kNegativeZero = 0x80000000u;
+    std::uint32_t bits = 0, bad = 0;
+    for (std::ptrdiff_t y = y0; y < y1; ++y) {
+      const float* v = value_.row(y);
+#pragma omp simd reduction(| : bits, bad)
+      for (std::ptrdiff_t x = x0; x < x1; ++x) {
+        const auto k = std::bit_cast<std::uint32_t>(to_link_(v[x]));
+        bits |= k & ~kNegativeZero;
+        bad |= std::uint32_t(k >= kInfinity && k != kNegativeZero);
+      }
+    }
+    if (bad)
+      for (std::ptrdiff_t y = y0; y < y1; ++y)
+        for (std::ptrdiff_t x = x0; x < x1; ++x) check_pixel(x, y);
+    return bits != 0;
+  }
+
+  ConstPlane value_;
+  ToLink to_link_;
+};
+
+}  // namespace tridiff::adi_detail
+
+namespace tridiff {
+
+template <class ToLink>
+DiffusionReport diffuse_adi(Image& dst, const Image& src, ConstPlane value, ToLink to_link,
+                            const DiffusionOptions& options) {
+  adi_detail::require_same_size(src.width(), src.height(), value, "value");
+  return adi_detail::run_adi(dst, src, adi_detail::PixelConductance<ToLink>(value, to_link),
+                             options);
+}
+
+}  // namespace tridiff
