@@ -29,14 +29,13 @@ class LinkFieldSource {
     adi_detail::band_rows<W>(h.row(y0), h.pitch(), count, zero_row, rows);
     detail::gather_into_lanes<float, W>(rows, x0, columns, lanes);
   }
-  void column_links(std::ptrdiff_t y, std::ptrdiff_t x0, std::ptrdiff_t count, std::ptrdiff_t lanes,
-                    float* out) const {
-    const float* row = links_.vertical().row(y);
-    std::copy(row + x0, row + x0 + count, out);
-    std::fill(out + count, out + lanes, 0.f);
-  }
-  void prefetch_column_links(std::ptrdiff_t y, std::ptrdiff_t x0, std::ptrdiff_t lanes) const {
-    for (std::ptrdiff_t x = x0; x < x0 + lanes; x += 16) __builtin_prefetch(links_.vertical().row(y) + x);
+  void column_links(std::ptrdiff_t y0, std::ptrdiff_t rows, std::ptrdiff_t x0, std::ptrdiff_t count,
+                    std::ptrdiff_t lanes, float* out) const {
+    for (std::ptrdiff_t r = 0; r < rows; ++r) {
+      const float* row = links_.vertical().row(y0 + r);
+      std::copy(row + x0, row + x0 + count, out + r * lanes);
+      std::fill(out + r * lanes + count, out + (r + 1) * lanes, 0.f);
+    }
   }
   // LinkField::finish() checked every link.
   void check_pixel(std::ptrdiff_t, std::ptrdiff_t) const {}

@@ -205,21 +205,6 @@ void solve_row_segment(const Source& source, const PlaneStack<float>& dst,
   }
 }
 
-// Asks for rows [y0, y1) of the band of kLanes columns from x0, in planes [c0, c0 + planes)
-// and in the source's links: the columns pass walks down 64-pixel-wide strips of several
-// planes at once, a pattern of short strided runs the hardware prefetchers do not follow
-// well; without this the solve waits on every row.
-template <int W, class Source>
-void prefetch_rows(const Source& source, const PlaneStack<const float>& src, int c0, int planes,
-                   std::ptrdiff_t x0, std::ptrdiff_t y0, std::ptrdiff_t y1) {
-  constexpr std::ptrdiff_t kLine = 64 / sizeof(float);
-  for (std::ptrdiff_t y = y0; y < y1; ++y) {
-    for (int c = c0; c < c0 + planes; ++c)
-      for (std::ptrdiff_t x = x0; x < x0 + W; x += kLine) __builtin_prefetch(src.row(c, y) + x);
-    source.prefetch_column_links(y, x0, W);
-  }
-}
-
 // The columns pass of planes [c0, c0 + Rhs) over one segment of a band of `count` columns
 // from x0. A full band is solved in place in the image (its lanes are contiguous); a partial
 // one (the right edge) through a copy padded with zeros.
@@ -230,7 +215,8 @@ void solve_column_segment(const Source& source, const PlaneStack<float>& dst,
   const std::ptrdiff_t n = s.end - s.begin;
   float* work = scratch;
   float* block_beta = work + detail::diffusion_lanes_workspace<float>(n, W, Rhs);
-  float* padded = block_beta + kBlock * W;  // partial bands: n rows of Rhs planes of W lanes
+  float* eliminated = block_beta + (kBlock + 1) * W;  // full bands: kBlock rows of Rhs planes of W lanes
+  float* padded = eliminated + kBlock * Rhs * W;  // partial bands: n rows of Rhs planes of W lanes
   const bool full = count == W;
   if (!full)
     for (std::ptrdiff_t i = 0; i < n; ++i)
@@ -243,19 +229,24 @@ void solve_column_segment(const Source& source, const PlaneStack<float>& dst,
   detail::DiffusionLanes<float, W, Rhs> sweep(n, work);
   for (std::ptrdiff_t begin = 0; begin < n; begin += kBlock) {
     const std::ptrdiff_t end = std::min(n, begin + kBlock);
-    if (full)
-      prefetch_rows<W>(source, src, c0, Rhs, x0, s.begin + end, s.begin + std::min(n, end + kBlock));
-    for (std::ptrdiff_t i = begin; i < end; ++i)
-      source.column_links(s.begin + i, x0, count, W, block_beta + (i - begin) * W);
-    if (full)
-      sweep.forward(begin, end, block_beta, W, src.row(c0, s.begin + begin) + x0, src.pitch,
-                    src.plane_stride);
-    else
+    source.column_links(s.begin + begin, end - begin, x0, count, W, block_beta);
+    if (full) {
+      // The eliminated values go to dst, through L1: a block is stored only once the sweep
+      // found it valid, so src (which dst may be) is intact where a bad value must be named.
+      sweep.forward_to(begin, end, block_beta, W, src.row(c0, s.begin + begin) + x0, src.pitch,
+                       src.plane_stride, eliminated, Rhs * W, W);
+      if (!sweep.healthy()) throw_first_bad_pixel(source, src, x0, x0 + count, s.begin, s.end);
+      for (std::ptrdiff_t i = begin; i < end; ++i)
+        for (int c = 0; c < Rhs; ++c)
+          std::copy(eliminated + ((i - begin) * Rhs + c) * W,
+                    eliminated + ((i - begin) * Rhs + c + 1) * W, dst.row(c0 + c, s.begin + i) + x0);
+    } else
       sweep.forward(begin, end, block_beta, W, padded + begin * Rhs * W, Rhs * W, W);
   }
   if (!sweep.healthy()) throw_first_bad_pixel(source, src, x0, x0 + count, s.begin, s.end);
   if (full) {
-    sweep.backward(0, n, dst.row(c0, s.begin) + x0, dst.pitch, dst.plane_stride);
+    float* x = dst.row(c0, s.begin) + x0;
+    sweep.backward_from(0, n, x, dst.pitch, dst.plane_stride, x, dst.pitch, dst.plane_stride);
     return;
   }
   sweep.backward(0, n, padded, Rhs * W, W);
@@ -268,7 +259,7 @@ void solve_column_segment(const Source& source, const PlaneStack<float>& dst,
 
 inline std::size_t column_scratch_floats(std::ptrdiff_t n) {
   return std::size_t(detail::diffusion_lanes_workspace<float>(n, kLanes, kMaxRhs) +
-                     kBlock * kLanes + n * kMaxRhs * kLanes);
+                     (kBlock + 1) * kLanes + kBlock * kLanes * kMaxRhs + n * kMaxRhs * kLanes);
 }
 
 // Calls solve<Rhs>(c0) for planes [c0, c0 + Rhs), in groups of at most kMaxRhs.
@@ -293,9 +284,10 @@ void for_each_plane_group(int planes, Solve&& solve) {
 //     std::ptrdiff_t columns, const float* zero_row, float* lanes): lanes[k * kLanes + l] =
 //     the link (x0 + k, y0 + l)-(x0 + k + 1, y0 + l) for k < columns, zero at the border and
 //     for l >= count (zero_row: a row of zeros as long as the image's);
-//   void column_links(std::ptrdiff_t y, std::ptrdiff_t x0, std::ptrdiff_t count, float* out):
-//     the links (x, y)-(x, y + 1) for x in [x0, x0 + count), zero at the border, and zero in
-//     out[count, kLanes);
+//   void column_links(std::ptrdiff_t y0, std::ptrdiff_t rows, std::ptrdiff_t x0,
+//     std::ptrdiff_t count, std::ptrdiff_t lanes, float* out): out[r * lanes + l] = the link
+//     (x0 + l, y0 + r)-(x0 + l, y0 + r + 1) for r < rows, zero at the border and for
+//     l >= count; out has room for rows + 1 rows;
 //   void check_pixel(std::ptrdiff_t x, std::ptrdiff_t y): throws InvalidArgument naming the
 //     pixel if a conductance there is negative or not finite.
 template <class Source>
@@ -392,18 +384,27 @@ DiffusionReport run_adi(Image& dst, const Image& src, const Source& source,
 template <class ToLink>
 class PixelConductance {
  public:
-  PixelConductance(ConstPlane value, ToLink to_link) : value_(value), to_link_(to_link) {}
+  // Checks every conductance and finds the tiles that hold one, in one pass over `value` in
+  // memory order (both passes share the result; the columns pass would otherwise scan
+  // 64-pixel-wide strips).
+  PixelConductance(ConstPlane value, ToLink to_link, int threads)
+      : value_(value),
+        to_link_(to_link),
+        tiles_x_((value.width() + kTile - 1) / kTile),
+        tiles_y_((value.height() + kTile - 1) / kTile),
+        conducting_(tiles_x_ * tiles_y_, 0) {
+    bool bad = false;
+#pragma omp parallel for num_threads(detail::resolve_threads(threads)) schedule(dynamic, 1) \
+    reduction(|| : bad) if (tiles_y_ > 1)
+    for (std::ptrdiff_t ty = 0; ty < tiles_y_; ++ty) bad = scan_tile_row(ty) || bad;
+    if (bad) throw_first_bad_conductance();
+  }
 
   void activity(Direction direction, std::ptrdiff_t band, std::vector<std::uint8_t>& active) const {
-    const std::ptrdiff_t width = value_.width(), height = value_.height();
-    const std::ptrdiff_t tiles_x = (width + kTile - 1) / kTile, tiles_y = (height + kTile - 1) / kTile;
     const bool rows = direction == Direction::Rows;
-    active.assign(rows ? tiles_x : tiles_y, 0);
-    for (std::ptrdiff_t t = 0; t < std::ptrdiff_t(active.size()); ++t) {
-      const std::ptrdiff_t tx = rows ? t : band, ty = rows ? band : t;
-      active[t] = any_conductance(tx * kTile, std::min(width, (tx + 1) * kTile), ty * kTile,
-                                  std::min(height, (ty + 1) * kTile));
-    }
+    active.resize(rows ? tiles_x_ : tiles_y_);
+    for (std::ptrdiff_t t = 0; t < std::ptrdiff_t(active.size()); ++t)
+      active[t] = rows ? conducting_[band * tiles_x_ + t] : conducting_[t * tiles_x_ + band];
   }
 
   template <int W>
@@ -426,23 +427,27 @@ class PixelConductance {
     }
   }
 
-  void column_links(std::ptrdiff_t y, std::ptrdiff_t x0, std::ptrdiff_t count, std::ptrdiff_t lanes,
-                    float* out) const {
-    std::ptrdiff_t filled = 0;
-    if (y + 1 < value_.height()) {
-      const float* here = value_.row(y) + x0;
-      const float* below = value_.row(y + 1) + x0;
+  void column_links(std::ptrdiff_t y0, std::ptrdiff_t rows, std::ptrdiff_t x0, std::ptrdiff_t count,
+                    std::ptrdiff_t lanes, float* out) const {
+    // The conductances of rows [y0, y0 + rows] (the last one for the block's last link), as
+    // far as the image goes: each pixel's once, not once per link.
+    const std::ptrdiff_t known = std::min(rows + 1, value_.height() - y0);
+    for (std::ptrdiff_t r = 0; r < known; ++r) {
+      const float* v = value_.row(y0 + r) + x0;
+      float* k = out + r * lanes;
 #pragma omp simd
-      for (std::ptrdiff_t l = 0; l < count; ++l)
-        out[l] = std::min(to_link_(here[l]), to_link_(below[l]));
-      filled = count;
+      for (std::ptrdiff_t l = 0; l < count; ++l) k[l] = to_link_(v[l]);
     }
-    std::fill(out + filled, out + lanes, 0.f);
-  }
-
-  void prefetch_column_links(std::ptrdiff_t y, std::ptrdiff_t x0, std::ptrdiff_t lanes) const {
-    if (y + 1 >= value_.height()) return;
-    for (std::ptrdiff_t x = x0; x < x0 + lanes; x += 16) __builtin_prefetch(value_.row(y + 1) + x);
+    for (std::ptrdiff_t r = 0; r < rows; ++r) {
+      float* here = out + r * lanes;
+      if (r + 1 < known) {
+#pragma omp simd
+        for (std::ptrdiff_t l = 0; l < count; ++l) here[l] = std::min(here[l], here[l + lanes]);
+        std::fill(here + count, here + lanes, 0.f);
+      } else {
+        std::fill(here, here + lanes, 0.f);  // the bottom border
+      }
+    }
   }
 
   void check_pixel(std::ptrdiff_t x, std::ptrdiff_t y) const {
@@ -455,32 +460,40 @@ class PixelConductance {
   }
 
  private:
-  // Whether any pixel of [x0, x1) x [y0, y1) has a conductance other than zero. Every
-  // conductance is checked on the way (the links take the smaller of two ends, which could
-  // hide a NaN at the border): InvalidArgument naming the first bad pixel.
-  bool any_conductance(std::ptrdiff_t x0, std::ptrdiff_t x1, std::ptrdiff_t y0,
-                       std::ptrdiff_t y1) const {
+  // Marks the tiles of tile row ty that hold a conductance other than zero (a tile marked
+  // inactive then has no link); returns whether a conductance is negative or not finite.
+  bool scan_tile_row(std::ptrdiff_t ty) {
     // On the bit patterns: +0 and -0 are the zeros; a valid conductance is below the
     // pattern of +infinity; anything else with the sign bit is negative or NaN.
     constexpr std::uint32_t kInfinity = 0x7f800000u, kNegativeZero = 0x80000000u;
-    std::uint32_t bits = 0, bad = 0;
-    for (std::ptrdiff_t y = y0; y < y1; ++y) {
+    const std::ptrdiff_t width = value_.width();
+    std::uint32_t bad = 0;
+    for (std::ptrdiff_t y = ty * kTile; y < std::min(value_.height(), (ty + 1) * kTile); ++y) {
       const float* v = value_.row(y);
+      for (std::ptrdiff_t tx = 0; tx < tiles_x_; ++tx) {
+        std::uint32_t bits = 0;
 #pragma omp simd reduction(| : bits, bad)
-      for (std::ptrdiff_t x = x0; x < x1; ++x) {
-        const auto k = std::bit_cast<std::uint32_t>(to_link_(v[x]));
-        bits |= k & ~kNegativeZero;
-        bad |= std::uint32_t(k >= kInfinity && k != kNegativeZero);
+        for (std::ptrdiff_t x = tx * kTile; x < std::min(width, (tx + 1) * kTile); ++x) {
+          const auto k = std::bit_cast<std::uint32_t>(to_link_(v[x]));
+          bits |= k & ~kNegativeZero;
+          bad |= std::uint32_t(k >= kInfinity && k != kNegativeZero);
+        }
+        conducting_[ty * tiles_x_ + tx] |= bits != 0;
       }
     }
-    if (bad)
-      for (std::ptrdiff_t y = y0; y < y1; ++y)
-        for (std::ptrdiff_t x = x0; x < x1; ++x) check_pixel(x, y);
-    return bits != 0;
+    return bad != 0;
+  }
+
+  [[noreturn]] void throw_first_bad_conductance() const {
+    for (std::ptrdiff_t y = 0; y < value_.height(); ++y)
+      for (std::ptrdiff_t x = 0; x < value_.width(); ++x) check_pixel(x, y);
+    throw InvalidArgument("value", -1, -1, "a conductance is not finite and >= 0");
   }
 
   ConstPlane value_;
   ToLink to_link_;
+  std::ptrdiff_t tiles_x_, tiles_y_;
+  std::vector<std::uint8_t> conducting_;  // per tile, row-major
 };
 
 }  // namespace tridiff::adi_detail
@@ -491,8 +504,8 @@ template <class ToLink>
 DiffusionReport diffuse_adi(Image& dst, const Image& src, ConstPlane value, ToLink to_link,
                             const DiffusionOptions& options) {
   adi_detail::require_same_size(src.width(), src.height(), value, "value");
-  return adi_detail::run_adi(dst, src, adi_detail::PixelConductance<ToLink>(value, to_link),
-                             options);
+  return adi_detail::run_adi(
+      dst, src, adi_detail::PixelConductance<ToLink>(value, to_link, options.threads), options);
 }
 
 }  // namespace tridiff

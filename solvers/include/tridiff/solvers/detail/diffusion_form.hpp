@@ -69,6 +69,17 @@ class DiffusionLanes {
   // its right-hand side c at (i - begin) * stride + c * plane_stride + lane.
   void forward(std::ptrdiff_t begin, std::ptrdiff_t end, const R* beta, std::ptrdiff_t beta_stride,
                const T* d, std::ptrdiff_t stride, std::ptrdiff_t plane_stride) {
+    forward_to(begin, end, beta, beta_stride, d, stride, plane_stride,
+               eliminated_ + begin * Rhs * W, Rhs * W, W);
+  }
+
+  // forward, with the eliminated right-hand sides of row i stored by the caller, at
+  // e + (i - begin) * e_stride + c * e_plane_stride + lane (only n * W reals of workspace are
+  // then used). A driver can keep them in the rows the solution will overwrite, which halves
+  // what a long system keeps in cache between the sweeps.
+  void forward_to(std::ptrdiff_t begin, std::ptrdiff_t end, const R* beta, std::ptrdiff_t beta_stride,
+                  const T* d, std::ptrdiff_t stride, std::ptrdiff_t plane_stride, T* e_out,
+                  std::ptrdiff_t e_stride, std::ptrdiff_t e_plane_stride) {
     // Work on local copies of the state: the compiler then keeps it in registers, as it
     // cannot prove that the stores through w and e leave the members alone.
     R beta_before[W], e_before[W], probe[W];
@@ -79,7 +90,7 @@ class DiffusionLanes {
       const T* rhs = d + (i - begin) * stride;
       const bool has_link = i + 1 < n_;  // beta[n-1] is not part of the system
       R* w = multipliers_ + i * W;
-      T* e = eliminated_ + i * Rhs * W;
+      T* e = e_out + (i - begin) * e_stride;
 #pragma omp simd
       for (int l = 0; l < W; ++l) {
         const R beta_here = has_link ? b[l] : R(0);
@@ -88,7 +99,7 @@ class DiffusionLanes {
         R zero_if_finite = 0;
         for (int c = 0; c < Rhs; ++c) {
           const T value = (rhs[c * plane_stride + l] + beta_before[l] * carry[c][l]) * inverse;
-          e[c * W + l] = value;
+          e[c * e_plane_stride + l] = value;
           carry[c][l] = value;
           zero_if_finite += magnitude(value) * 0;
         }
@@ -121,18 +132,25 @@ class DiffusionLanes {
   // of row i goes to x + (i - begin) * stride + c * plane_stride + lane.
   void backward(std::ptrdiff_t begin, std::ptrdiff_t end, T* x, std::ptrdiff_t stride,
                 std::ptrdiff_t plane_stride = 0) {
+    backward_from(begin, end, eliminated_ + begin * Rhs * W, Rhs * W, W, x, stride, plane_stride);
+  }
+
+  // backward, reading the eliminated right-hand sides where forward_to put them (e may be x).
+  void backward_from(std::ptrdiff_t begin, std::ptrdiff_t end, const T* e_in, std::ptrdiff_t e_stride,
+                     std::ptrdiff_t e_plane_stride, T* x, std::ptrdiff_t stride,
+                     std::ptrdiff_t plane_stride) {
     T carry[Rhs][W];
     for (int c = 0; c < Rhs; ++c)
       for (int l = 0; l < W; ++l) carry[c][l] = carry_[c][l];
     for (std::ptrdiff_t i = end - 1; i >= begin; --i) {
       const R* w = multipliers_ + i * W;
-      const T* e = eliminated_ + i * Rhs * W;
+      const T* e = e_in + (i - begin) * e_stride;
       T* out = x + (i - begin) * stride;
       const bool last = i == n_ - 1;
 #pragma omp simd
       for (int l = 0; l < W; ++l)
         for (int c = 0; c < Rhs; ++c) {
-          carry[c][l] = last ? e[c * W + l] : e[c * W + l] + w[l] * carry[c][l];
+          carry[c][l] = last ? e[c * e_plane_stride + l] : e[c * e_plane_stride + l] + w[l] * carry[c][l];
           out[c * plane_stride + l] = carry[c][l];
         }
     }
