@@ -78,8 +78,8 @@ class PlaneView {
 using Plane = PlaneView<float>;
 using ConstPlane = PlaneView<const float>;
 
-// An owning planar float image. Each row is padded to a multiple of kPitchAlign floats (64 bytes,
-// one AVX-512 register) and every plane starts on a 64-byte boundary; padding is zero.
+// An owning planar float image. Each row is padded to an odd number of kPitchAlign floats (64
+// bytes, one AVX-512 register; see pitch_for) and every plane starts on a 64-byte boundary; padding is zero.
 class Image {
  public:
   static constexpr std::ptrdiff_t kPitchAlign = 16;
@@ -97,6 +97,15 @@ class Image {
     return *this;
   }
 
+  // Row pitch for `width` floats: whole 64-byte lines, and an odd number of them when there is
+  // more than one, so that a walk down a column visits every cache set. With an even count
+  // the rows fall into a few sets (a 2048-float pitch puts every row in one set of L1), and
+  // the column passes of the solvers and filters, which read 32-64 rows side by side, miss.
+  static std::ptrdiff_t pitch_for(std::ptrdiff_t width) {
+    const std::ptrdiff_t lines = (width + kPitchAlign - 1) / kPitchAlign;
+    return (lines > 1 && lines % 2 == 0 ? lines + 1 : lines) * kPitchAlign;
+  }
+
   // Reallocates as width x height x channels, every value zero.
   void reset(std::ptrdiff_t width, std::ptrdiff_t height, int channels) {
     if (width < 1 || height < 1)
@@ -107,7 +116,7 @@ class Image {
     width_ = width;
     height_ = height;
     channels_ = channels;
-    pitch_ = (width + kPitchAlign - 1) / kPitchAlign * kPitchAlign;
+    pitch_ = pitch_for(width);
     storage_ = detail::allocate_zeroed_floats(size());
   }
 
