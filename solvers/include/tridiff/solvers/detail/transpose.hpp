@@ -1,6 +1,6 @@
 // Small transposes between W contiguous rows and lane-contiguous blocks (row k of a block
-// holds element k of every row): how image rows become one SIMD lane per system. Blocks are
-// at most 16 columns wide; with AVX-512, float blocks are transposed 16 x 16 in registers.
+// holds element k of every row): how image rows become one SIMD lane per system. Rows move 16
+// columns at a time; with AVX-512, float blocks are transposed 16 x 16 in registers.
 #pragma once
 
 #include <algorithm>
@@ -58,79 +58,11 @@ inline __mmask16 first_columns(std::ptrdiff_t columns) {
 }
 #endif
 
-// block[k * W + l] = rows[l * pitch + k] for k < columns (<= 16), l < W.
-template <class T, int W>
-inline void transpose_into_lanes_16(const T* rows, std::ptrdiff_t pitch, std::ptrdiff_t columns,
-                                 T* block) {
-#if defined(__AVX512F__)
-  if constexpr (std::is_same_v<T, float> && W % 16 == 0) {
-    const __mmask16 mask = first_columns(columns);
-    for (int group = 0; group < W; group += 16) {
-      __m512 r[16];
-      for (int k = 0; k < 16; ++k) r[k] = _mm512_maskz_loadu_ps(mask, rows + (group + k) * pitch);
-      transpose_16x16(r);
-      for (std::ptrdiff_t k = 0; k < columns; ++k) _mm512_storeu_ps(block + k * W + group, r[k]);
-    }
-    return;
-  }
-#endif
-  for (int l = 0; l < W; ++l) {
-    const T* row = rows + l * pitch;
-    for (std::ptrdiff_t k = 0; k < columns; ++k) block[k * W + l] = row[k];
-  }
-}
-
-// rows[l * pitch + k] = block[k * W + l] for k < columns (<= 16), l < W.
-template <class T, int W>
-inline void transpose_from_lanes_16(const T* block, std::ptrdiff_t columns, T* rows,
-                                 std::ptrdiff_t pitch) {
-#if defined(__AVX512F__)
-  if constexpr (std::is_same_v<T, float> && W % 16 == 0) {
-    const __mmask16 mask = first_columns(columns);
-    for (int group = 0; group < W; group += 16) {
-      __m512 r[16];
-      for (std::ptrdiff_t k = 0; k < 16; ++k)
-        r[k] = k < columns ? _mm512_loadu_ps(block + k * W + group) : _mm512_setzero_ps();
-      transpose_16x16(r);
-      for (int k = 0; k < 16; ++k) _mm512_mask_storeu_ps(rows + (group + k) * pitch, mask, r[k]);
-    }
-    return;
-  }
-#endif
-  for (int l = 0; l < W; ++l) {
-    T* row = rows + l * pitch;
-    for (std::ptrdiff_t k = 0; k < columns; ++k) row[k] = block[k * W + l];
-  }
-}
-
-// block[k * W + l] = rows[l * pitch + k] for k < columns, l < W.
-template <class T, int W>
-inline void transpose_into_lanes(const T* rows, std::ptrdiff_t pitch, std::ptrdiff_t columns,
-                                 T* block) {
-  // W rows are read side by side, 64 bytes of each at a time: more streams than the hardware
-  // prefetchers follow, so each row is fetched four cache lines ahead (measured: the IIR row
-  // pass 14 -> 12 ms per 4096^2 plane).
-  constexpr std::ptrdiff_t kAhead = 4 * 64 / sizeof(T);
-  for (std::ptrdiff_t k = 0; k < columns; k += 16) {
-    if (k + kAhead < columns)
-      for (int l = 0; l < W; ++l) __builtin_prefetch(rows + l * pitch + k + kAhead);
-    transpose_into_lanes_16<T, W>(rows + k, pitch, std::min<std::ptrdiff_t>(16, columns - k),
-                                  block + k * W);
-  }
-}
-
-// rows[l * pitch + k] = block[k * W + l] for k < columns, l < W.
-template <class T, int W>
-inline void transpose_from_lanes(const T* block, std::ptrdiff_t columns, T* rows,
-                                 std::ptrdiff_t pitch) {
-  for (std::ptrdiff_t k = 0; k < columns; k += 16)
-    transpose_from_lanes_16<T, W>(block + k * W, std::min<std::ptrdiff_t>(16, columns - k),
-                                  rows + k, pitch);
-}
-
 // block[k * W + l] = rows[l][x + k] for k < columns, l < W: W rows anywhere in memory (a band
-// of image rows, with a spare row standing in for rows past the image). Each row is fetched
-// four cache lines ahead, as in transpose_into_lanes.
+// of image rows, with a spare row standing in for rows past the image). W rows read side by
+// side, 64 bytes of each at a time, are more streams than the hardware prefetchers follow, so
+// each row is fetched four cache lines ahead (measured: the IIR row pass 14 -> 12 ms per
+// 4096^2 plane).
 template <class T, int W>
 inline void gather_into_lanes(const T* const* rows, std::ptrdiff_t x, std::ptrdiff_t columns,
                               T* block) {
@@ -178,6 +110,24 @@ inline void scatter_from_lanes(const T* block, std::ptrdiff_t columns, T* const*
     for (int l = 0; l < W; ++l)
       for (std::ptrdiff_t j = 0; j < width; ++j) rows[l][x + k + j] = block[(k + j) * W + l];
   }
+}
+
+// block[k * W + l] = rows[l * pitch + k] for k < columns, l < W.
+template <class T, int W>
+inline void transpose_into_lanes(const T* rows, std::ptrdiff_t pitch, std::ptrdiff_t columns,
+                                 T* block) {
+  const T* pointers[W];
+  for (int l = 0; l < W; ++l) pointers[l] = rows + l * pitch;
+  gather_into_lanes<T, W>(pointers, 0, columns, block);
+}
+
+// rows[l * pitch + k] = block[k * W + l] for k < columns, l < W.
+template <class T, int W>
+inline void transpose_from_lanes(const T* block, std::ptrdiff_t columns, T* rows,
+                                 std::ptrdiff_t pitch) {
+  T* pointers[W];
+  for (int l = 0; l < W; ++l) pointers[l] = rows + l * pitch;
+  scatter_from_lanes<T, W>(block, columns, pointers, 0);
 }
 
 }  // namespace tridiff::detail
