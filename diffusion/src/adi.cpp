@@ -37,8 +37,6 @@ class LinkFieldSource {
       std::fill(out + r * lanes + count, out + (r + 1) * lanes, 0.f);
     }
   }
-  // LinkField::finish() checked every link.
-  void check_pixel(std::ptrdiff_t, std::ptrdiff_t) const {}
 
  private:
   const LinkField& links_;

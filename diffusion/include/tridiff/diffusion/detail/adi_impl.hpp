@@ -143,18 +143,15 @@ inline void copy_finite(float* dst, const float* src, std::ptrdiff_t n, std::ptr
     if (!std::isfinite(src[i])) throw_not_finite(x0 + i, y);
 }
 
-// A solve found a bad value somewhere in the rectangle [x0, x1) x [y0, y1): names the first
-// one, row by row (a conductance the source rejects, or a non-finite pixel of src).
-template <class Source>
-[[noreturn]] void throw_first_bad_pixel(const Source& source, const PlaneStack<const float>& src,
-                                        std::ptrdiff_t x0, std::ptrdiff_t x1, std::ptrdiff_t y0,
-                                        std::ptrdiff_t y1) {
+// A solve found a non-finite value somewhere in the rectangle [x0, x1) x [y0, y1) of src
+// (the sources check their conductances before any solve): names the first, row by row.
+[[noreturn]] inline void throw_first_bad_pixel(const PlaneStack<const float>& src,
+                                               std::ptrdiff_t x0, std::ptrdiff_t x1,
+                                               std::ptrdiff_t y0, std::ptrdiff_t y1) {
   for (std::ptrdiff_t y = y0; y < y1; ++y)
-    for (std::ptrdiff_t x = x0; x < x1; ++x) {
-      source.check_pixel(x, y);
+    for (std::ptrdiff_t x = x0; x < x1; ++x)
       for (int c = 0; c < src.count; ++c)
         if (!std::isfinite(src.row(c, y)[x])) throw_not_finite(x, y);
-    }
   throw NumericalError(-1, -1, "a diffusion solve failed on valid input");  // not reached
 }
 
@@ -197,7 +194,7 @@ void solve_row_segment(const Source& source, const PlaneStack<float>& dst,
       detail::gather_into_lanes<float, W>(in[c], s.begin + begin, columns, block + c * kBlock * W);
     sweep.forward(begin, begin + columns, links, W, block, W, kBlock * W);
   }
-  if (!sweep.healthy()) throw_first_bad_pixel(source, src, s.begin, s.end, y0, y0 + count);
+  if (!sweep.healthy()) throw_first_bad_pixel(src, s.begin, s.end, y0, y0 + count);
   for (std::ptrdiff_t begin = (n - 1) / kBlock * kBlock; begin >= 0; begin -= kBlock) {
     const std::ptrdiff_t columns = std::min(n, begin + kBlock) - begin;
     sweep.backward(begin, begin + columns, block, W, kBlock * W);
@@ -236,7 +233,7 @@ void solve_column_segment(const Source& source, const PlaneStack<float>& dst,
       // found it valid, so src (which dst may be) is intact where a bad value must be named.
       sweep.forward_to(begin, end, block_beta, W, src.row(c0, s.begin + begin) + x0, src.pitch,
                        src.plane_stride, eliminated, Rhs * W, W);
-      if (!sweep.healthy()) throw_first_bad_pixel(source, src, x0, x0 + count, s.begin, s.end);
+      if (!sweep.healthy()) throw_first_bad_pixel(src, x0, x0 + count, s.begin, s.end);
       for (std::ptrdiff_t i = begin; i < end; ++i)
         for (int c = 0; c < Rhs; ++c)
           std::copy(eliminated + ((i - begin) * Rhs + c) * W,
@@ -244,7 +241,7 @@ void solve_column_segment(const Source& source, const PlaneStack<float>& dst,
     } else
       sweep.forward(begin, end, block_beta, W, padded + begin * Rhs * W, Rhs * W, W);
   }
-  if (!sweep.healthy()) throw_first_bad_pixel(source, src, x0, x0 + count, s.begin, s.end);
+  if (!sweep.healthy()) throw_first_bad_pixel(src, x0, x0 + count, s.begin, s.end);
   if (full) {
     float* x = dst.row(c0, s.begin) + x0;
     sweep.backward_from(0, n, x, dst.pitch, dst.plane_stride, x, dst.pitch, dst.plane_stride);
@@ -289,9 +286,8 @@ void for_each_plane_group(int planes, Solve&& solve) {
 //   void column_links(std::ptrdiff_t y0, std::ptrdiff_t rows, std::ptrdiff_t x0,
 //     std::ptrdiff_t count, std::ptrdiff_t lanes, float* out): out[r * lanes + l] = the link
 //     (x0 + l, y0 + r)-(x0 + l, y0 + r + 1) for r < rows, zero at the border and for
-//     l >= count; out has room for rows + 1 rows;
-//   void check_pixel(std::ptrdiff_t x, std::ptrdiff_t y): throws InvalidArgument naming the
-//     pixel if a conductance there is negative or not finite.
+//     l >= count; out has room for rows + 1 rows.
+// Every conductance a source gives is finite and >= 0 (checked when it was made).
 template <class Source>
 DiffusionReport run_pass(Direction direction, const PlaneStack<float>& dst,
                          const PlaneStack<const float>& src, const Source& source,
@@ -399,7 +395,7 @@ class PixelConductance {
 #pragma omp parallel for num_threads(detail::resolve_threads(threads)) schedule(dynamic, 1) \
     reduction(|| : bad) if (tiles_y_ > 1)
     for (std::ptrdiff_t ty = 0; ty < tiles_y_; ++ty) bad = scan_tile_row(ty) || bad;
-    if (bad) throw_first_bad_conductance();
+    if (bad) throw_bad_conductance(value_, to_link_);  // names the first bad pixel
   }
 
   void activity(Direction direction, std::ptrdiff_t band, std::vector<std::uint8_t>& active) const {
@@ -452,15 +448,6 @@ class PixelConductance {
     }
   }
 
-  void check_pixel(std::ptrdiff_t x, std::ptrdiff_t y) const {
-    const float k = to_link_(value_(x, y));
-    if (!(k >= 0) || !std::isfinite(k))
-      throw InvalidArgument("value", -1, -1,
-                            "pixel (" + std::to_string(x) + ", " + std::to_string(y) + "): " +
-                                std::to_string(value_(x, y)) + " maps to conductance " +
-                                std::to_string(k) + "; it must be finite and >= 0");
-  }
-
  private:
   // Marks the tiles of tile row ty that hold a conductance other than zero (a tile marked
   // inactive then has no link); returns whether a conductance is negative or not finite.
@@ -484,12 +471,6 @@ class PixelConductance {
       }
     }
     return bad != 0;
-  }
-
-  [[noreturn]] void throw_first_bad_conductance() const {
-    for (std::ptrdiff_t y = 0; y < value_.height(); ++y)
-      for (std::ptrdiff_t x = 0; x < value_.width(); ++x) check_pixel(x, y);
-    throw InvalidArgument("value", -1, -1, "a conductance is not finite and >= 0");
   }
 
   ConstPlane value_;
