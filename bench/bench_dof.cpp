@@ -6,6 +6,12 @@
 //   BM_dof_<method>/<scene>/<W>x<H>/threads:<t> the other scenes
 //   BM_dof_<method>_focus/<percent>/threads:2   focus_fraction_scene(2048, 2048, percent / 100):
 //                                               a compact block out of focus, the rest sharp
+//   BM_dof_<method>_focus_in_place/<percent>/threads:2
+//                                               the same, out == color, for the methods that
+//                                               work in place (DofMethod::in_place): the tiles
+//                                               in focus are not even copied. Each run blurs
+//                                               the last one's output again (the work is the
+//                                               same: it depends on the CoC only)
 // for sizes 1024x1024 and 3840x2160 and threads 1 and 2. What is timed is the method alone: the
 // scene's colour and CoC are made once, before timing, and cached.
 // Counters:
@@ -234,6 +240,23 @@ void bm_method(benchmark::State& state, const DofMethod& method, const std::stri
   state.counters["leakage_vs_scatter"] = e.leakage;
 }
 
+// The focus-fraction scene diffused where it lies, out == color (see the file comment).
+void bm_in_place(benchmark::State& state, const DofMethod& method, int focus_percent) {
+  const CachedScene& cached = scene("focus", kFocusSize, kFocusSize, focus_percent);
+  copy_seconds(kFocusSize, kFocusSize, kFocusThreads);
+  DofSettings settings;
+  settings.threads = kFocusThreads;
+  Image image = cached.scene.color;
+  DofReport report;
+  for (auto _ : state) {
+    report = {};
+    method.run(image, image, cached.scene.coc.plane(0), settings, report);
+    benchmark::ClobberMemory();
+  }
+  set_counters(state, kFocusSize, kFocusSize, kFocusThreads, report.skipped_fraction);
+  state.counters["work_fraction"] = cached.work_fraction;
+}
+
 void register_all() {
   const std::pair<std::ptrdiff_t, std::ptrdiff_t> sizes[] = {{1024, 1024}, {3840, 2160}};
   auto add = [](const std::string& name, auto&&... args) {
@@ -262,6 +285,12 @@ void register_all() {
       add("BM_dof_" + std::string(method.name) + "_focus/" + std::to_string(percent) +
               "/threads:" + std::to_string(kFocusThreads),
           bm_method, method, "focus", percent, kFocusSize, kFocusSize, kFocusThreads);
+  for (const DofMethod& method : dof_methods())
+    if (method.in_place)
+      for (int percent : {0, 10, 25, 50, 100})
+        add("BM_dof_" + std::string(method.name) + "_focus_in_place/" + std::to_string(percent) +
+                "/threads:" + std::to_string(kFocusThreads),
+            bm_in_place, method, percent);
 }
 
 }  // namespace

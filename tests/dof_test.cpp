@@ -464,6 +464,38 @@ TEST(DofMethods, DofSkipMatchesNoSkip) {
   }
 }
 
+TEST(DofMethods, InPlaceGivesTheSeparateOutput) {
+  // out == color: the in-place methods blur where the image lies, the others are given a copy
+  // (without it they would reallocate out, the input, before reading it). A far block and a
+  // near one (negative CoC), so that the layered path runs too.
+  const std::ptrdiff_t width = 256, height = 192;
+  const Image color = random_image(width, height, 3, 0.f, 2.f, 12);
+  const Image coc = make_coc(width, height, [](auto x, auto y) {
+    if (x >= 68 && x < 124 && y >= 70 && y < 126) return 9.f;
+    return (x >= 150 && x < 190 && y >= 20 && y < 60) ? -6.f : 0.f;
+  });
+  for (const DofMethod& method : dof_methods())
+    for (bool layers : {false, true}) {
+      DofSettings settings;
+      settings.layers = layers;
+      const Result separate = run(method, color, coc, settings);
+      Image image = color;
+      DofReport report;
+      method.run(image, image, coc.plane(0), settings, report);
+      const std::string where = std::string(method.name) + (layers ? " layered" : "");
+      ASSERT_EQ(image.width(), width) << where;
+      ASSERT_EQ(image.channels(), 3) << where;
+      std::ptrdiff_t differ = 0;
+      for (int ch = 0; ch < 3; ++ch)
+        for (std::ptrdiff_t y = 0; y < height; ++y)
+          for (std::ptrdiff_t x = 0; x < width; ++x)
+            differ += !same_bits(image(x, y, ch), separate.out(x, y, ch));
+      EXPECT_EQ(differ, 0) << where;
+      EXPECT_EQ(report.skipped_fraction, separate.report.skipped_fraction) << where;
+      EXPECT_EQ(report.layered, separate.report.layered) << where;
+    }
+}
+
 TEST(DofMethods, DofConservesMass) {
   const Case c = mixed_case();
   for (const DofMethod& method : diffusion_methods()) {
@@ -758,6 +790,21 @@ TEST(DofInput, CocOfWrongSizeRejected) {
           "coc")
           << method.name;
     }
+  }
+}
+
+TEST(DofInput, CocInsideTheOutputRejected) {
+  // A CoC that is a plane of out would be read after out is reallocated or written.
+  const Image color = random_image(40, 30, 3, 0.f, 1.f, 3);
+  for (const DofMethod& method : dof_methods()) {
+    Image out(40, 30, 4);
+    for (std::ptrdiff_t y = 0; y < 30; ++y)
+      for (std::ptrdiff_t x = 0; x < 40; ++x) out(x, y, 3) = 4.f;
+    DofReport report;
+    const Thrown t =
+        invalid_argument_of([&] { method.run(out, color, out.plane(3), {}, report); });
+    EXPECT_EQ(t.argument, "coc") << method.name;
+    EXPECT_TRUE(contains(t.message, "output")) << method.name;
   }
 }
 

@@ -122,7 +122,11 @@ int run_dof(const cli::Arguments& args) {
   settings.error_budget_psnr = args.number("psnr-budget", 30.f);
   settings.progress = progress_bar();
   DofReport report;
-  Image result;
+  // A method that works in place (adi) blurs the frame where it lies: the tiles in focus are
+  // not even copied. The input is kept apart only when it is written out as well.
+  const bool in_place = method.in_place && !args.has("input-output");
+  Image separate_result;
+  Image& result = in_place ? frame.color : separate_result;
   const auto method_start = std::chrono::steady_clock::now();
   method.run(result, color, coc.plane(0), settings, report);
   const double method_seconds = seconds(method_start);

@@ -21,30 +21,55 @@ void run_gems(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
 
 namespace {
 
+// Every method runs through this. It refuses a CoC plane inside out (out is reallocated, or
+// written, while the CoC is still read), and gives a method that cannot work in place a copy
+// of the colour when out is the colour (it would reallocate out before reading it). `auto`
+// passes out == color on to the method it runs, whose own wrapper decides.
+template <DofRun Run, bool kInPlace>
+void checked(Image& out, const Image& color, ConstPlane coc, const DofSettings& settings,
+             DofReport& report) {
+  if (!out.empty() && coc.data()) {
+    const float* begin = out.data();
+    const float* end = begin + out.plane_stride() * out.channels();
+    if (coc.data() >= begin && coc.data() < end)
+      throw InvalidArgument("coc", -1, -1, "lies in the output image (give a separate plane)");
+  }
+  if (kInPlace || &out != &color) return Run(out, color, coc, settings, report);
+  const Image input = color;
+  Run(out, input, coc, settings, report);
+}
+
 constexpr std::array kMethods{
     DofMethod{"adi", "implicit heat diffusion, one ADI step of tridiagonal solves (seed 000 §3.5)",
-              false, true, "O(pixels), independent of the CoC", dof_detail::run_adi, true},
+              false, true, "O(pixels), independent of the CoC",
+              checked<dof_detail::run_adi, true>, true, true},
     DofMethod{"mpad", "multi-pass anisotropic diffusion, explicit steps (seed 000 §5.3.4)",
-              false, false, "O(pixels x max CoC^2 / 8) steps", dof_detail::run_mpad, true},
+              false, false, "O(pixels x max CoC^2 / 8) steps",
+              checked<dof_detail::run_mpad, false>, true, false},
     DofMethod{"ipf", "Inverse Post Filter scatter, depth test, 8-bit registers (seed 004 §5)",
-              true, false, "O(pixels x min(max |CoC|, 16)^2)", dof_detail::run_ipf, false},
+              true, false, "O(pixels x min(max |CoC|, 16)^2)",
+              checked<dof_detail::run_ipf, false>, false, false},
     DofMethod{"scatter", "the slow reference: area-normalised anti-aliased CoC discs, depth layers",
-              true, false, "O(pixels x CoC^2)", dof_detail::run_scatter, true},
+              true, false, "O(pixels x CoC^2)", checked<dof_detail::run_scatter, false>, true,
+              false},
     DofMethod{"poisson", "Poisson-disc gather by the own CoC, blurred levels (seed 000 §5.3.3)",
-              false, true, "O(pixels x 13..49 taps) + O(pixels) levels", dof_detail::run_poisson,
-              true},
+              false, true, "O(pixels x 13..49 taps) + O(pixels) levels",
+              checked<dof_detail::run_poisson, false>, true, false},
     DofMethod{"pyramid-layers", "CoC depth layers, quasi-convolution pyramids, over (seed 001 4.5)",
               true, true, "O(pixels x layers), layers ~ 2 log2(max |CoC|)",
-              dof_detail::run_pyramid_layers, false},
+              checked<dof_detail::run_pyramid_layers, false>, false, false},
     DofMethod{"sat", "three boxes from a half-resolution summed-area table (seed 003)", false, true,
-              "O(pixels), independent of the CoC", dof_detail::run_sat, true},
-    DofMethod{"sat-layers", "near over far summed-area tables normalised by coverage (seed 003)",
-              true, true, "O(pixels), independent of the CoC", dof_detail::run_sat_layers, false},
-    DofMethod{"gems", "GPU Gems 3 ch. 28: blend of 3 blur levels, spread near CoC (seed 002)",
-              true, false, "O(pixels x (1 + min(max |CoC|, 512) / 12))", dof_detail::run_gems,
+              "O(pixels), independent of the CoC", checked<dof_detail::run_sat, false>, true,
               false},
+    DofMethod{"sat-layers", "near over far summed-area tables normalised by coverage (seed 003)",
+              true, true, "O(pixels), independent of the CoC",
+              checked<dof_detail::run_sat_layers, false>, false, false},
+    DofMethod{"gems", "GPU Gems 3 ch. 28: blend of 3 blur levels, spread near CoC (seed 002)",
+              true, false, "O(pixels x (1 + min(max |CoC|, 512) / 12))",
+              checked<dof_detail::run_gems, false>, false, false},
     DofMethod{"auto", "the cheapest method whose measured error meets --psnr-budget (auto.hpp)",
-              false, false, "the chosen method's", dof_detail::run_auto, false},
+              false, false, "the chosen method's", checked<dof_detail::run_auto, true>, false,
+              false},
 };
 
 }  // namespace

@@ -37,7 +37,8 @@ struct DofReport {
 };
 
 // out = `color` (linear light, any channel count) with depth of field for the signed CoC
-// diameters `coc` (pixels; negative in front of the focus). out is reallocated as needed.
+// diameters `coc` (pixels; negative in front of the focus). out is reallocated as needed. out
+// may be color itself (see DofMethod::in_place); coc must not lie in out (InvalidArgument).
 using DofRun = void (*)(Image& out, const Image& color, ConstPlane coc, const DofSettings&,
                         DofReport&);
 
@@ -52,6 +53,9 @@ struct DofMethod {
   // A sharp pixel that the reference leaves unchanged (no nearer blur covers it) keeps its input
   // value bit for bit: the method never blurs what is in focus (tests/dof_quality_test.cpp).
   bool keeps_sharp;
+  // Whether the method works where the image lies when out is color: the pixels it skips
+  // (tiles in focus) then cost nothing at all. The others are given a copy of the colour.
+  bool in_place;
 };
 
 // Every registered method, in a fixed order.

@@ -451,26 +451,48 @@ class PixelConductance {
  private:
   // Marks the tiles of tile row ty that hold a conductance other than zero (a tile marked
   // inactive then has no link); returns whether a conductance is negative or not finite.
+  // Each tile keeps 16 lanes of bits, reduced once per tile row: reducing them once per image
+  // row made this scan cost three times a read of the plane.
   bool scan_tile_row(std::ptrdiff_t ty) {
     // On the bit patterns: +0 and -0 are the zeros; a valid conductance is below the
     // pattern of +infinity; anything else with the sign bit is negative or NaN.
     constexpr std::uint32_t kInfinity = 0x7f800000u, kNegativeZero = 0x80000000u;
+    constexpr int kWidth = 16;
+    static_assert(kTile % kWidth == 0);
     const std::ptrdiff_t width = value_.width();
-    std::uint32_t bad = 0;
+    thread_local std::vector<std::uint32_t> seen;  // tiles_x_ x kWidth lanes
+    seen.assign(std::size_t(tiles_x_ * kWidth), 0u);
+    std::uint32_t bad[kWidth] = {};
     for (std::ptrdiff_t y = ty * kTile; y < std::min(value_.height(), (ty + 1) * kTile); ++y) {
       const float* v = value_.row(y);
-      for (std::ptrdiff_t tx = 0; tx < tiles_x_; ++tx) {
-        std::uint32_t bits = 0;
-#pragma omp simd reduction(| : bits, bad)
-        for (std::ptrdiff_t x = tx * kTile; x < std::min(width, (tx + 1) * kTile); ++x) {
-          const auto k = std::bit_cast<std::uint32_t>(to_link_(v[x]));
-          bits |= k & ~kNegativeZero;
-          bad |= std::uint32_t(k >= kInfinity && k != kNegativeZero);
+      for (std::ptrdiff_t x0 = 0; x0 < width; x0 += kWidth) {
+        // The conductances first, then the bits: in one loop GCC 12 kept to_link's branch
+        // and did not vectorise.
+        const int lanes = int(std::min<std::ptrdiff_t>(kWidth, width - x0));
+        float link[kWidth] = {};
+        if (lanes == kWidth) {
+#pragma omp simd
+          for (int l = 0; l < kWidth; ++l) link[l] = to_link_(v[x0 + l]);
+        } else {
+          for (int l = 0; l < lanes; ++l) link[l] = to_link_(v[x0 + l]);
         }
-        conducting_[ty * tiles_x_ + tx] |= bits != 0;
+        std::uint32_t* bits = seen.data() + x0 / kTile * kWidth;
+#pragma omp simd
+        for (int l = 0; l < kWidth; ++l) {
+          const auto k = std::bit_cast<std::uint32_t>(link[l]);
+          bits[l] |= k & ~kNegativeZero;
+          bad[l] |= std::uint32_t(k >= kInfinity && k != kNegativeZero);
+        }
       }
     }
-    return bad != 0;
+    for (std::ptrdiff_t tx = 0; tx < tiles_x_; ++tx) {
+      std::uint32_t bits = 0;
+      for (int l = 0; l < kWidth; ++l) bits |= seen[tx * kWidth + l];
+      conducting_[ty * tiles_x_ + tx] = bits != 0;
+    }
+    std::uint32_t any_bad = 0;
+    for (int l = 0; l < kWidth; ++l) any_bad |= bad[l];
+    return any_bad != 0;
   }
 
   ConstPlane value_;
