@@ -429,6 +429,62 @@ TEST(Methods, FftIsWithinItsRegisteredErrorOfTheReference) {
   expect_within_registered_bound("fft", {128}, 8);  // its largest sigma
 }
 
+// ---- gaussian-fir: the truncated Gaussian in strips ---------------------------------------
+
+TEST(GaussianFir, WithinItsStatedErrorOfTheReferenceAcrossSigmas) {
+  // Every radius it uses (2 at sigma 0.5 up to 11 at sigma 3).
+  const BlurMethod& method = find_blur_method("gaussian-fir");
+  EXPECT_FALSE(method.exact);
+  for (double sigma : {0.5, 0.8, 1.0, 1.3, 1.7, 2.0, 2.5, 3.0}) {
+    const double error = method_error(method, sigma, Border::replicate, 64);
+    EXPECT_LE(error, method.max_error) << "sigma " << sigma;
+    std::printf("  gaussian-fir sigma %4.2f max error %.2e\n", sigma, error);
+  }
+}
+
+TEST(GaussianFir, EqualsTheSameTruncatedKernelAppliedByBruteForce) {
+  // The kernel it states (the sampled Gaussian cut at a tail of 2e-4), summed in double by
+  // brute force: the two agree up to float rounding, at sizes around the 16-row strips and
+  // 16-column blocks, including planes narrower than the kernel.
+  const BlurMethod& method = find_blur_method("gaussian-fir");
+  for (double sigma : {0.7, 2.0, 3.0}) {
+    const std::vector<float> k = gaussian_kernel(sigma, gaussian_radius(sigma, 2e-4));
+    for (std::ptrdiff_t w : {1, 2, 3, 15, 16, 17, 33, 65})
+      for (std::ptrdiff_t h : {1, 2, 15, 16, 17, 31, 33}) {
+        const Image in = random_image(w, h, static_cast<unsigned>(w * 100 + h));
+        Image out(w, h, 1);
+        blur(method, in.plane(0), out.plane(0), {sigma, Border::replicate, 2});
+        const DoublePlane exact = brute_force_separable(in.plane(0), k, k, Border::replicate);
+        EXPECT_LE(max_abs_difference(out.plane(0), exact), 2e-6)
+            << "sigma " << sigma << ", " << w << " x " << h;
+      }
+  }
+}
+
+TEST(GaussianFir, AViewInsideALargerPlaneAndThreadsAgree) {
+  // A rectangle of a larger plane (pitch > width, its last row ending mid-row of the parent),
+  // one and two threads: the same bits, and nothing outside the rectangle is written.
+  const BlurMethod& method = find_blur_method("gaussian-fir");
+  const Image in = random_image(61, 50, 3);
+  const ConstPlane view = in.plane(0).sub({5, 3, 43, 41});
+  Image one(61, 50, 1), two(61, 50, 1);
+  blur(method, view, one.plane(0).sub({5, 3, 43, 41}), {2.0, Border::replicate, 1});
+  blur(method, view, two.plane(0).sub({5, 3, 43, 41}), {2.0, Border::replicate, 2});
+  for (std::ptrdiff_t y = 0; y < 50; ++y)
+    for (std::ptrdiff_t x = 0; x < 61; ++x) {
+      ASSERT_EQ(one(x, y, 0), two(x, y, 0)) << x << ", " << y;
+      const bool inside = x >= 5 && x < 48 && y >= 3 && y < 44;
+      if (!inside) {
+        ASSERT_EQ(one(x, y, 0), 0.f) << x << ", " << y;
+      }
+    }
+  const Image flat = testing_util::make_image(37, 21, 1, [](auto, auto, int) { return 0.625f; });
+  Image out(37, 21, 1);
+  blur(method, flat.plane(0), out.plane(0), {2.5});
+  for (std::ptrdiff_t y = 0; y < 21; ++y)
+    for (std::ptrdiff_t x = 0; x < 37; ++x) ASSERT_NEAR(out(x, y, 0), 0.625f, 1e-6);
+}
+
 TEST(Methods, SigmaOutsideTheRangeIsRejected) {
   Image in(8, 8, 1), out(8, 8, 1);
   EXPECT_EQ(invalid_argument_of([&] {

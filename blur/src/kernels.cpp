@@ -27,7 +27,11 @@ namespace tridiff {
 
 // ---- kernels ----------------------------------------------------------------------------
 
-std::ptrdiff_t gaussian_radius(double sigma) {
+std::ptrdiff_t gaussian_radius(double sigma) { return gaussian_radius(sigma, kGaussianTailMass); }
+
+std::ptrdiff_t gaussian_radius(double sigma, double tail_mass) {
+  if (!(tail_mass > 0 && tail_mass < 1))
+    throw InvalidArgument("tail_mass", -1, -1, "must lie in (0, 1), got " + std::to_string(tail_mass));
   const std::ptrdiff_t max_radius = reference_radius(sigma);  // also checks sigma
   const std::vector<double> full = sampled_gaussian(sigma, max_radius);
   // full is normalised over [-max_radius, max_radius], whose own tail beyond is < 2e-9: the
@@ -36,7 +40,7 @@ std::ptrdiff_t gaussian_radius(double sigma) {
   std::ptrdiff_t r = max_radius;
   while (r > 1) {
     const double dropped = tail + full[0 + (max_radius - r)] + full[max_radius + r];
-    if (dropped > kGaussianTailMass) break;
+    if (dropped > tail_mass) break;
     tail = dropped;
     --r;
   }

@@ -33,6 +33,8 @@ inline constexpr double kGaussianTailMass = 1e-7;
 // (ceil(6 sigma)), whose kernel is the reference itself. InvalidArgument unless sigma is finite
 // and > 0.
 std::ptrdiff_t gaussian_radius(double sigma);
+// The same for another bound on the dropped tail mass (in (0, 1)).
+std::ptrdiff_t gaussian_radius(double sigma, double tail_mass);
 
 // The sampled Gaussian exp(-k^2 / (2 sigma^2)), k in [-r, r], normalised to sum 1 in double and
 // then rounded to float. r = gaussian_radius(sigma) unless given.
