@@ -27,7 +27,10 @@ class LinkFieldSource {
     const ConstPlane h = links_.horizontal();
     const float* rows[W];
     adi_detail::band_rows<W>(h.row(y0), h.pitch(), count, zero_row, rows);
-    detail::gather_into_lanes<float, W>(rows, x0, columns, lanes);
+    detail::gather_into_lanes<float, W>(rows, x0, columns, lanes, h.width());
+  }
+  void prefetch_column(std::ptrdiff_t y, std::ptrdiff_t x0, std::ptrdiff_t count) const {
+    adi_detail::prefetch_span(links_.vertical().row(y) + x0, count);
   }
   void column_links(std::ptrdiff_t y0, std::ptrdiff_t rows, std::ptrdiff_t x0, std::ptrdiff_t count,
                     std::ptrdiff_t lanes, float* out) const {

@@ -155,6 +155,11 @@ inline void copy_finite(float* dst, const float* src, std::ptrdiff_t n, std::ptr
   throw NumericalError(-1, -1, "a diffusion solve failed on valid input");  // not reached
 }
 
+// Fetches the cache lines of [p, p + count) into L2 ahead of their use.
+inline void prefetch_span(const float* p, std::ptrdiff_t count) {
+  for (std::ptrdiff_t i = 0; i < count; i += 16) __builtin_prefetch(p + i, 0, 2);
+}
+
 // The W rows of a band of `count` rows from y0 in one plane, as row pointers; the lanes
 // past the band's last row point at `spare` (a row of zeros to read, or one nobody reads to
 // write).
@@ -191,7 +196,8 @@ void solve_row_segment(const Source& source, const PlaneStack<float>& dst,
     source.template row_link_lanes<W>(y0, count, s.begin + begin, columns,
                                       scratch.zero_row(src.width), links);
     for (int c = 0; c < Rhs; ++c)
-      detail::gather_into_lanes<float, W>(in[c], s.begin + begin, columns, block + c * kBlock * W);
+      detail::gather_into_lanes<float, W>(in[c], s.begin + begin, columns, block + c * kBlock * W,
+                                          s.end);
     sweep.forward(begin, begin + columns, links, W, block, W, kBlock * W);
   }
   if (!sweep.healthy()) throw_first_bad_pixel(src, s.begin, s.end, y0, y0 + count);
@@ -199,8 +205,10 @@ void solve_row_segment(const Source& source, const PlaneStack<float>& dst,
     const std::ptrdiff_t columns = std::min(n, begin + kBlock) - begin;
     sweep.backward(begin, begin + columns, block, W, kBlock * W);
     for (int c = 0; c < Rhs; ++c)
-      detail::scatter_from_lanes<float, W>(block + c * kBlock * W, columns, out[c], s.begin + begin);
+      detail::scatter_from_lanes<float, W>(block + c * kBlock * W, columns, out[c], s.begin + begin,
+                                           true);
   }
+  detail::finish_streaming_stores();
 }
 
 // The columns pass of planes [c0, c0 + Rhs) over one segment of a band of `count` columns
@@ -227,6 +235,14 @@ void solve_column_segment(const Source& source, const PlaneStack<float>& dst,
   detail::DiffusionLanes<float, W, Rhs> sweep(n, work);
   for (std::ptrdiff_t begin = 0; begin < n; begin += kBlock) {
     const std::ptrdiff_t end = std::min(n, begin + kBlock);
+    // The next block's rows, fetched into L2 while this one is solved: the hardware
+    // prefetchers do not follow a walk down the image 256 bytes a row (the ADI DOF, 3840 x
+    // 2160 RGB, 2 threads: 18.5 -> 16.7 ms; two blocks ahead, or into L1, no better).
+    if (full)
+      for (std::ptrdiff_t i = end; i < std::min(n, end + kBlock); ++i) {
+        source.prefetch_column(s.begin + i, x0, count);
+        for (int c = 0; c < Rhs; ++c) prefetch_span(src.row(c0 + c, s.begin + i) + x0, count);
+      }
     source.column_links(s.begin + begin, end - begin, x0, count, W, block_beta);
     if (full) {
       // The eliminated values go to dst, through L1: a block is stored only once the sweep
@@ -243,8 +259,14 @@ void solve_column_segment(const Source& source, const PlaneStack<float>& dst,
   }
   if (!sweep.healthy()) throw_first_bad_pixel(src, x0, x0 + count, s.begin, s.end);
   if (full) {
-    float* x = dst.row(c0, s.begin) + x0;
-    sweep.backward_from(0, n, x, dst.pitch, dst.plane_stride, x, dst.pitch, dst.plane_stride);
+    // Up the band a block at a time, the block above fetched while this one is solved.
+    for (std::ptrdiff_t begin = (n - 1) / kBlock * kBlock; begin >= 0; begin -= kBlock) {
+      for (std::ptrdiff_t i = std::max<std::ptrdiff_t>(0, begin - kBlock); i < begin; ++i)
+        for (int c = 0; c < Rhs; ++c) prefetch_span(dst.row(c0 + c, s.begin + i) + x0, W);
+      float* x = dst.row(c0, s.begin + begin) + x0;
+      sweep.backward_from(begin, std::min(n, begin + kBlock), x, dst.pitch, dst.plane_stride, x,
+                          dst.pitch, dst.plane_stride);
+    }
     return;
   }
   sweep.backward(0, n, padded, Rhs * W, W);
@@ -286,7 +308,9 @@ void for_each_plane_group(int planes, Solve&& solve) {
 //   void column_links(std::ptrdiff_t y0, std::ptrdiff_t rows, std::ptrdiff_t x0,
 //     std::ptrdiff_t count, std::ptrdiff_t lanes, float* out): out[r * lanes + l] = the link
 //     (x0 + l, y0 + r)-(x0 + l, y0 + r + 1) for r < rows, zero at the border and for
-//     l >= count; out has room for rows + 1 rows.
+//     l >= count; out has room for rows + 1 rows;
+//   void prefetch_column(std::ptrdiff_t y, std::ptrdiff_t x0, std::ptrdiff_t count): fetches
+//     what column_links will read of row y for columns [x0, x0 + count).
 // Every conductance a source gives is finite and >= 0 (checked when it was made).
 template <class Source>
 DiffusionReport run_pass(Direction direction, const PlaneStack<float>& dst,
@@ -413,7 +437,7 @@ class PixelConductance {
     // The conductances of columns [x0, x0 + columns] (the last one for the block's last link),
     // as far as the image goes.
     const std::ptrdiff_t known = std::min(columns + 1, value_.width() - x0);
-    detail::gather_into_lanes<float, W>(rows, x0, known, lanes);
+    detail::gather_into_lanes<float, W>(rows, x0, known, lanes, value_.width());
 #pragma omp simd
     for (std::ptrdiff_t i = 0; i < known * W; ++i) lanes[i] = to_link_(lanes[i]);
     for (std::ptrdiff_t k = 0; k < columns; ++k) {
@@ -423,6 +447,10 @@ class PixelConductance {
       for (int l = 0; l < W; ++l)
         here[l] = has_link && l < count ? std::min(here[l], here[l + W]) : 0.f;
     }
+  }
+
+  void prefetch_column(std::ptrdiff_t y, std::ptrdiff_t x0, std::ptrdiff_t count) const {
+    prefetch_span(value_.row(y) + x0, count);
   }
 
   void column_links(std::ptrdiff_t y0, std::ptrdiff_t rows, std::ptrdiff_t x0, std::ptrdiff_t count,
