@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <type_traits>
 
 #include "tridiff/solvers/detail/scalar.hpp"
 #include "tridiff/solvers/detail/transpose.hpp"
@@ -80,6 +81,13 @@ class DiffusionLanes {
   void forward_to(std::ptrdiff_t begin, std::ptrdiff_t end, const R* beta, std::ptrdiff_t beta_stride,
                   const T* d, std::ptrdiff_t stride, std::ptrdiff_t plane_stride, T* e_out,
                   std::ptrdiff_t e_stride, std::ptrdiff_t e_plane_stride) {
+#if defined(__AVX512F__)
+    if constexpr (std::is_same_v<T, float> && W % 16 == 0 && Rhs > 1) {
+      forward_to_avx512(begin, end, beta, beta_stride, d, stride, plane_stride, e_out, e_stride,
+                        e_plane_stride);
+      return;
+    }
+#endif
     // Work on local copies of the state: the compiler then keeps it in registers, as it
     // cannot prove that the stores through w and e leave the members alone.
     R beta_before[W], e_before[W], probe[W];
@@ -139,6 +147,12 @@ class DiffusionLanes {
   void backward_from(std::ptrdiff_t begin, std::ptrdiff_t end, const T* e_in, std::ptrdiff_t e_stride,
                      std::ptrdiff_t e_plane_stride, T* x, std::ptrdiff_t stride,
                      std::ptrdiff_t plane_stride) {
+#if defined(__AVX512F__)
+    if constexpr (std::is_same_v<T, float> && W % 16 == 0 && Rhs > 1) {
+      backward_from_avx512(begin, end, e_in, e_stride, e_plane_stride, x, stride, plane_stride);
+      return;
+    }
+#endif
     T carry[Rhs][W];
     for (int c = 0; c < Rhs; ++c)
       for (int l = 0; l < W; ++l) carry[c][l] = carry_[c][l];
@@ -159,6 +173,91 @@ class DiffusionLanes {
   }
 
  private:
+#if defined(__AVX512F__)
+  // The sweeps of float lanes with several right-hand sides, written with AVX-512 intrinsics:
+  // the same operations in the same order as the portable loops (the same results), with the
+  // state in registers. GCC 12 kept the portable loops' state arrays on the stack when Rhs > 1,
+  // so that each step's recurrence went through a store and a load. Measured on one core, in
+  // L1/L2, three right-hand sides, per 16 lanes: W = 32 35.6 -> 22 cycles, W = 64 35 -> 26;
+  // the ADI DOF passes at 3840 x 2160 RGB, 2 threads: rows 7.7 -> 6.8 ms, columns 7.3 -> 6.7.
+  // (With one right-hand side GCC keeps the state in registers itself, and is as fast.)
+  static constexpr int kVectors = W / 16;
+
+  void forward_to_avx512(std::ptrdiff_t begin, std::ptrdiff_t end, const float* beta,
+                         std::ptrdiff_t beta_stride, const float* d, std::ptrdiff_t stride,
+                         std::ptrdiff_t plane_stride, float* e_out, std::ptrdiff_t e_stride,
+                         std::ptrdiff_t e_plane_stride) {
+    const __m512 zero = _mm512_setzero_ps(), one = _mm512_set1_ps(1.f);
+    __m512 beta_before[kVectors], e_before[kVectors], probe[kVectors], carry[Rhs][kVectors];
+    for (int v = 0; v < kVectors; ++v) {
+      beta_before[v] = _mm512_loadu_ps(beta_before_ + 16 * v);
+      e_before[v] = _mm512_loadu_ps(e_before_ + 16 * v);
+      probe[v] = _mm512_loadu_ps(probe_ + 16 * v);
+      for (int c = 0; c < Rhs; ++c) carry[c][v] = _mm512_loadu_ps(carry_[c] + 16 * v);
+    }
+    for (std::ptrdiff_t i = begin; i < end; ++i) {
+      const float* b = beta + (i - begin) * beta_stride;
+      const float* rhs = d + (i - begin) * stride;
+      const bool has_link = i + 1 < n_;  // beta[n-1] is not part of the system
+      float* w = multipliers_ + i * W;
+      float* e = e_out + (i - begin) * e_stride;
+      for (int v = 0; v < kVectors; ++v) {
+        const __m512 beta_here = has_link ? _mm512_loadu_ps(b + 16 * v) : zero;
+        const __m512 g = _mm512_fmadd_ps(beta_before[v], e_before[v], one);
+        const __m512 inverse = _mm512_div_ps(one, _mm512_add_ps(g, beta_here));
+        __m512 zero_if_finite = _mm512_mul_ps(beta_here, zero);
+        for (int c = 0; c < Rhs; ++c) {
+          const __m512 value = _mm512_mul_ps(
+              _mm512_fmadd_ps(beta_before[v], carry[c][v],
+                              _mm512_loadu_ps(rhs + c * plane_stride + 16 * v)),
+              inverse);
+          _mm512_storeu_ps(e + c * e_plane_stride + 16 * v, value);
+          carry[c][v] = value;
+          zero_if_finite = _mm512_fmadd_ps(value, zero, zero_if_finite);
+        }
+        _mm512_storeu_ps(w + 16 * v, _mm512_mul_ps(beta_here, inverse));
+        e_before[v] = _mm512_mul_ps(g, inverse);
+        beta_before[v] = beta_here;
+        // Zero while beta and the values are finite and beta >= 0.
+        const __mmask16 negative = _mm512_cmp_ps_mask(beta_here, zero, _CMP_LT_OQ);
+        probe[v] = _mm512_mask_add_ps(_mm512_add_ps(probe[v], zero_if_finite), negative,
+                                      _mm512_add_ps(probe[v], zero_if_finite), one);
+      }
+    }
+    for (int v = 0; v < kVectors; ++v) {
+      _mm512_storeu_ps(beta_before_ + 16 * v, beta_before[v]);
+      _mm512_storeu_ps(e_before_ + 16 * v, e_before[v]);
+      _mm512_storeu_ps(probe_ + 16 * v, probe[v]);
+      for (int c = 0; c < Rhs; ++c) _mm512_storeu_ps(carry_[c] + 16 * v, carry[c][v]);
+    }
+  }
+
+  void backward_from_avx512(std::ptrdiff_t begin, std::ptrdiff_t end, const float* e_in,
+                            std::ptrdiff_t e_stride, std::ptrdiff_t e_plane_stride, float* x,
+                            std::ptrdiff_t stride, std::ptrdiff_t plane_stride) {
+    __m512 carry[Rhs][kVectors];
+    for (int v = 0; v < kVectors; ++v)
+      for (int c = 0; c < Rhs; ++c) carry[c][v] = _mm512_loadu_ps(carry_[c] + 16 * v);
+    for (std::ptrdiff_t i = end - 1; i >= begin; --i) {
+      const float* w = multipliers_ + i * W;
+      const float* e = e_in + (i - begin) * e_stride;
+      float* out = x + (i - begin) * stride;
+      const bool last = i == n_ - 1;
+      for (int v = 0; v < kVectors; ++v) {
+        const __m512 multiplier = _mm512_loadu_ps(w + 16 * v);
+        for (int c = 0; c < Rhs; ++c) {
+          const __m512 eliminated = _mm512_loadu_ps(e + c * e_plane_stride + 16 * v);
+          carry[c][v] =
+              last ? eliminated : _mm512_fmadd_ps(multiplier, carry[c][v], eliminated);
+          _mm512_storeu_ps(out + c * plane_stride + 16 * v, carry[c][v]);
+        }
+      }
+    }
+    for (int v = 0; v < kVectors; ++v)
+      for (int c = 0; c < Rhs; ++c) _mm512_storeu_ps(carry_[c] + 16 * v, carry[c][v]);
+  }
+#endif
+
   void load_state(R* beta_before, R* e_before, R* probe, T (*carry)[W]) const {
     for (int l = 0; l < W; ++l) {
       beta_before[l] = beta_before_[l];
