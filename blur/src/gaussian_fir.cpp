@@ -90,8 +90,9 @@ void filter_strip(ConstPlane in, Plane out, const float* k, std::ptrdiff_t y0) {
     slide<R>(k, kLanes, [&](std::ptrdiff_t i) { return lanes + (x + i) * kLanes; },
              [&](std::ptrdiff_t j) { return block + j * kLanes; });
     detail::scatter_from_lanes<float, kLanes>(block, std::min<std::ptrdiff_t>(kLanes, w - x),
-                                              out_rows, x);
+                                              out_rows, x, true);
   }
+  detail::finish_streaming_stores();
 }
 
 template <int R>
