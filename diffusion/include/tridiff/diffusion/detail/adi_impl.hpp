@@ -158,6 +158,14 @@ inline void copy_finite(float* dst, const float* src, std::ptrdiff_t n, std::ptr
   throw NumericalError(-1, -1, "a diffusion solve failed on valid input");  // not reached
 }
 
+// to[0, W) = from[0, W), 64 bytes at a time, inline (std::copy of one row of a band called
+// memmove: 5% of the columns pass).
+template <int W>
+void copy_lanes(const float* from, float* to) {
+  static_assert(W % 16 == 0);
+  for (int l = 0; l < W; l += 16) __builtin_memcpy(to + l, from + l, 16 * sizeof(float));
+}
+
 // Fetches the cache lines of [p, p + count) into L2 ahead of their use.
 inline void prefetch_span(const float* p, std::ptrdiff_t count) {
   for (std::ptrdiff_t i = 0; i < count; i += 16) __builtin_prefetch(p + i, 0, 2);
@@ -260,8 +268,7 @@ void solve_column_segment(const Source& source, const PlaneStack<float>& dst,
       if (!sweep.healthy()) throw_first_bad_pixel(src, x0, x0 + count, s.begin, s.end);
       for (std::ptrdiff_t i = begin; i < end; ++i)
         for (int c = 0; c < Rhs; ++c)
-          std::copy(eliminated + ((i - begin) * Rhs + c) * W,
-                    eliminated + ((i - begin) * Rhs + c + 1) * W, dst.row(c0 + c, s.begin + i) + x0);
+          copy_lanes<W>(eliminated + ((i - begin) * Rhs + c) * W, dst.row(c0 + c, s.begin + i) + x0);
     } else
       sweep.forward(begin, end, block_beta, W, padded + begin * Rhs * W, Rhs * W, W);
   }
