@@ -2,6 +2,8 @@
 // (tridiff/dof/scenes.hpp), against a plain copy of the same image, all measured in this one
 // binary so that the ratios are meaningful:
 //   BM_dof_copy/<W>x<H>/threads:<t>             copy of the RGB float image (the floor)
+//   BM_dof_adi_traffic/<W>x<H>/threads:<t>      the data movement of one ADI step as plain
+//                                               streams (adi_traffic): the adi method's floor
 //   BM_dof_<method>/<W>x<H>/threads:<t>         the `procedural` scene (thin-lens CoC)
 //   BM_dof_<method>/<scene>/<W>x<H>/threads:<t> the other scenes
 //   BM_dof_<method>_focus/<percent>/threads:2   focus_fraction_scene(2048, 2048, percent / 100):
@@ -125,6 +127,46 @@ void bm_copy(benchmark::State& state, std::ptrdiff_t width, std::ptrdiff_t heigh
   Image src(width, height, 3), dst(width, height, 3);
   for (auto _ : state) {
     copy_image(dst, src, threads);
+    benchmark::ClobberMemory();
+  }
+  set_counters(state, width, height, threads, 0);
+}
+
+// The memory traffic of one ADI step at the speed of plain streams, with next to no
+// arithmetic: the CoC read once (the adi method's activity scan), then two passes that each
+// read the CoC and three planes and write three (the rows pass from the colour into out, the
+// columns pass in place in out). The floor of the adi method's data movement, measured.
+void adi_traffic(Image& out, const Image& color, ConstPlane coc, int threads) {
+  float largest = 0;
+#pragma omp parallel for num_threads(threads) schedule(static) reduction(max : largest)
+  for (std::ptrdiff_t y = 0; y < coc.height(); ++y) {
+    const float* k = coc.row(y);
+#pragma omp simd reduction(max : largest)
+    for (std::ptrdiff_t x = 0; x < coc.width(); ++x) largest = std::max(largest, k[x]);
+  }
+  const float scale = largest > 0 ? 1.f / largest : 1.f;
+  for (int pass = 0; pass < 2; ++pass) {
+    const Image& from = pass == 0 ? color : out;
+#pragma omp parallel for num_threads(threads) schedule(static)
+    for (std::ptrdiff_t y = 0; y < coc.height(); ++y) {
+      const float* k = coc.row(y);
+      for (int c = 0; c < from.channels(); ++c) {
+        const float* in = from.plane(c).row(y);
+        float* to = out.plane(c).row(y);
+#pragma omp simd
+        for (std::ptrdiff_t x = 0; x < coc.width(); ++x) to[x] = in[x] * (k[x] * scale);
+      }
+    }
+  }
+}
+
+void bm_adi_traffic(benchmark::State& state, std::ptrdiff_t width, std::ptrdiff_t height,
+                    int threads) {
+  const CachedScene& cached = scene("procedural", width, height);
+  copy_seconds(width, height, threads);
+  Image out(width, height, 3);
+  for (auto _ : state) {
+    adi_traffic(out, cached.scene.color, cached.scene.coc.plane(0), threads);
     benchmark::ClobberMemory();
   }
   set_counters(state, width, height, threads, 0);
@@ -269,6 +311,11 @@ void register_all() {
       add("BM_dof_copy/" + std::to_string(w) + "x" + std::to_string(h) +
               "/threads:" + std::to_string(threads),
           bm_copy, w, h, threads);
+  for (auto [w, h] : sizes)
+    for (int threads : {1, 2})
+      add("BM_dof_adi_traffic/" + std::to_string(w) + "x" + std::to_string(h) +
+              "/threads:" + std::to_string(threads),
+          bm_adi_traffic, w, h, threads);
   // Scene by scene, 1024^2 first: its measured time replaces the probe in the 4K rows' guard.
   for (const DofSceneInfo& info : dof_scenes()) {
     const std::string name(info.name);
