@@ -94,12 +94,15 @@ const CachedScene& scene(const std::string& name, std::ptrdiff_t width, std::ptr
   return it->second;
 }
 
-// Best of 5 copies of a width x height RGB image, cached per (size, threads).
+// Best of 5 copies of a width x height RGB image (the procedural scene's colour: an image never
+// written reads the kernel's shared zero page, which sits in cache, and its copy measured only
+// the writes, 1.1 ms at 3840 x 2160 against 2.0 for real data), cached per (size, threads).
 double copy_seconds(std::ptrdiff_t width, std::ptrdiff_t height, int threads) {
   static std::map<std::tuple<std::ptrdiff_t, std::ptrdiff_t, int>, double> cache;
   auto key = std::tuple{width, height, threads};
   if (auto it = cache.find(key); it != cache.end()) return it->second;
-  Image src(width, height, 3), dst(width, height, 3);
+  const Image& src = scene("procedural", width, height).scene.color;
+  Image dst(width, height, 3);
   copy_image(dst, src, threads);  // touch the pages
   double best = 1e30;
   for (int i = 0; i < 5; ++i) {
@@ -124,7 +127,9 @@ void set_counters(benchmark::State& state, std::ptrdiff_t width, std::ptrdiff_t 
 
 void bm_copy(benchmark::State& state, std::ptrdiff_t width, std::ptrdiff_t height, int threads) {
   copy_seconds(width, height, threads);
-  Image src(width, height, 3), dst(width, height, 3);
+  const Image& src = scene("procedural", width, height).scene.color;
+  Image dst(width, height, 3);
+  copy_image(dst, src, threads);  // touch the pages
   for (auto _ : state) {
     copy_image(dst, src, threads);
     benchmark::ClobberMemory();
