@@ -36,9 +36,10 @@ inline constexpr std::ptrdiff_t kBlock = detail::kTransposeBlock;
 // that the loads of one overlap the arithmetic of the other).
 inline constexpr std::ptrdiff_t kRowBlock = 16;
 // Rows solved side by side in the rows pass, and columns in the columns pass (a band is
-// solved in groups of them). Measured on 3840 x 2160 RGB, 2 threads: rows 16 lanes take twice
-// as long as 32 (one vector cannot hide the latency of the elimination), 32 and 64 the same
-// (32 keeps the elimination's workspace at half the size); columns 32 and 64 the same.
+// solved in groups of them). Measured on 3840 x 2160 RGB, 2 threads: rows 16 lanes took twice
+// as long as 32 while the sweeps kept their state on the stack (one vector could not hide the
+// latency of the elimination), and about the same since; 32 and 64 the same (32 keeps the
+// elimination's workspace at half the size); columns 32 and 64 the same.
 inline constexpr std::ptrdiff_t kRowLanes = 32, kColumnLanes = 64;
 // Rows of a column band swept between two requests for the rows a block ahead.
 inline constexpr std::ptrdiff_t kChunk = 4;

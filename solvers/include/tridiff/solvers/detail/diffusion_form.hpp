@@ -175,8 +175,8 @@ class DiffusionLanes {
  private:
 #if defined(__AVX512F__)
   // The sweeps of float lanes with several right-hand sides, written with AVX-512 intrinsics:
-  // the same operations in the same order as the portable loops (the same results), with the
-  // state in registers. GCC 12 kept the portable loops' state arrays on the stack when Rhs > 1,
+  // the solution's operations in the order of the portable loops (with the multiply-adds GCC
+  // forms there), the validity probe in its own order, and the state in registers. GCC 12 kept the portable loops' state arrays on the stack when Rhs > 1,
   // so that each step's recurrence went through a store and a load. Measured on one core, in
   // L1/L2, three right-hand sides, per 16 lanes: W = 32 35.6 -> 22 cycles, W = 64 35 -> 26;
   // the ADI DOF passes at 3840 x 2160 RGB, 2 threads: rows 7.7 -> 6.8 ms, columns 7.3 -> 6.7.
@@ -220,8 +220,8 @@ class DiffusionLanes {
         beta_before[v] = beta_here;
         // Zero while beta and the values are finite and beta >= 0.
         const __mmask16 negative = _mm512_cmp_ps_mask(beta_here, zero, _CMP_LT_OQ);
-        probe[v] = _mm512_mask_add_ps(_mm512_add_ps(probe[v], zero_if_finite), negative,
-                                      _mm512_add_ps(probe[v], zero_if_finite), one);
+        const __m512 sum = _mm512_add_ps(probe[v], zero_if_finite);
+        probe[v] = _mm512_mask_add_ps(sum, negative, sum, one);
       }
     }
     for (int v = 0; v < kVectors; ++v) {
