@@ -30,17 +30,21 @@ static_assert(kLanes == detail::kLanes<float>);
 // the forward sweep's state then no longer fits the vector registers and spills to L1.
 inline constexpr int kMaxRhs = 3;
 inline constexpr std::ptrdiff_t kBlock = detail::kTransposeBlock;
-// Columns of the rows pass's batch transposed into lanes at a time: one 16 x 16 transpose per
-// 16 rows. Measured, the rows pass at 3840 x 2160 RGB, 2 threads: 6.6 ms with 16 columns, 7.3
-// with 32, 7.7 with 64 (the smaller block keeps the gathers and the recurrence closer, so
-// that the loads of one overlap the arithmetic of the other).
-inline constexpr std::ptrdiff_t kRowBlock = 16;
-// Rows solved side by side in the rows pass, and columns in the columns pass (a band is
-// solved in groups of them). Measured on 3840 x 2160 RGB, 2 threads: rows 16 lanes took twice
-// as long as 32 while the sweeps kept their state on the stack (one vector could not hide the
-// latency of the elimination), and about the same since; 32 and 64 the same (32 keeps the
-// elimination's workspace at half the size); columns 32 and 64 the same.
-inline constexpr std::ptrdiff_t kRowLanes = 32, kColumnLanes = 64;
+// Columns of the rows pass's batch transposed into lanes at a time, and rows solved side by
+// side in the rows pass and columns in the columns pass (a band is solved in groups of them).
+// Measured on 3840 x 2160 RGB, 2 threads, two hosts:
+// - an AMD EPYC with fast memory (copy of the frame 2.1 ms): rows 32 lanes with blocks of 16
+//   columns 6.6 ms, of 32 columns 7.3, of 64 7.7; rows 16 lanes about as fast as 32; columns
+//   32 and 64 lanes the same.
+// - an Intel Xeon with slow memory (copy 6.1-7.3 ms; a 512-bit division every 8 cycles, one
+//   16 x 16 transpose every 47): rows 32 lanes with blocks of 16 columns 17-18 ms, 16 lanes
+//   with blocks of 16 14-15 ms, with blocks of 32 11.3-11.8, of 64 12.0-12.3; columns 64
+//   lanes 14.7 ms, 32 lanes 11.3-12.0, 16 lanes 14.3. At 64 lanes the three right-hand
+//   sides' state no longer fits the 32 vector registers (the sweeps alone, in L1: 3.3 cycles
+//   a pixel at 64 lanes, 2.4 at 32), and 16 rows of four planes are half the streams of 32
+//   for the memory system to follow.
+inline constexpr std::ptrdiff_t kRowBlock = 32;
+inline constexpr std::ptrdiff_t kRowLanes = 16, kColumnLanes = 32;
 // Rows of a column band swept between two requests for the rows a block ahead.
 inline constexpr std::ptrdiff_t kChunk = 4;
 static_assert(kBlock % kChunk == 0);
