@@ -512,6 +512,7 @@ class PixelConductance {
     // pattern of +infinity; anything else with the sign bit is negative or NaN.
     constexpr std::uint32_t kInfinity = 0x7f800000u, kNegativeZero = 0x80000000u;
     constexpr int kWidth = 16;
+    constexpr std::ptrdiff_t kScanAhead = 512;
     static_assert(kTile % kWidth == 0);
     const std::ptrdiff_t width = value_.width();
     thread_local std::vector<std::uint32_t> seen;  // tiles_x_ x kWidth lanes
@@ -522,6 +523,9 @@ class PixelConductance {
       for (std::ptrdiff_t x0 = 0; x0 < width; x0 += kWidth) {
         // The conductances first, then the bits: in one loop GCC 12 kept to_link's branch
         // and did not vectorise.
+        // 2 KiB ahead: the hardware prefetchers of some hosts do not keep one stream fed
+        // (an Intel Xeon, 3840 x 2160, 2 threads: 2.2 -> 1.2 ms; 1 KiB or 4 KiB the same).
+        __builtin_prefetch(v + x0 + kScanAhead);
         const int lanes = int(std::min<std::ptrdiff_t>(kWidth, width - x0));
         float link[kWidth] = {};
         if (lanes == kWidth) {
