@@ -990,6 +990,34 @@ TEST(Diffusion, AdiNamesNonFinitePixel) {
       }
 }
 
+// The columns pass keeps its eliminated values in the rows it will overwrite, so in place a
+// bad value carries down its column before the search for it. Two bad values in different
+// columns and channels of full 32-column lanes: the first by rows is named, and so is a bad
+// value in the last row of a column.
+TEST(Diffusion, AdiInPlaceColumnsPassNamesFirstBadPixelByRows) {
+  const Size size{200, 150};
+  LinkField links = random_links(size, 2.f, 0.0, 141);
+  clear_tiles(links, [](auto, auto) { return true; }, false, true);  // vertical links only
+  struct Bad {
+    std::ptrdiff_t x, y;
+    int channel;
+    float value;
+  };
+  const float inf = std::numeric_limits<float>::infinity();
+  const std::pair<Bad, Bad> cases[] = {{{100, 90, 0, kNaN}, {40, 60, 2, inf}},
+                                       {{33, 20, 1, -inf}, {34, 21, 1, kNaN}},
+                                       {{70, 149, 2, kNaN}, {71, 149, 0, kNaN}}};
+  for (const auto& [first, second] : cases) {
+    const Bad earlier = first.y < second.y || (first.y == second.y && first.x < second.x)
+                            ? first : second;
+    Image image = random_image(size, 3, 142);
+    for (const Bad& b : {first, second}) image(b.x, b.y, b.channel) = b.value;
+    const Thrown thrown = invalid_argument_of([&] { diffuse_adi(image, image, links); });
+    EXPECT_EQ(thrown.argument, "src");
+    EXPECT_TRUE(contains(thrown.message, pixel(earlier.x, earlier.y))) << thrown.message;
+  }
+}
+
 // Forward Euler would spread a non-finite value over the image: refused up front.
 TEST(Diffusion, ExplicitNamesNonFinitePixel) {
   const Size size{130, 70};

@@ -168,14 +168,6 @@ inline void copy_finite(float* dst, const float* src, std::ptrdiff_t n, std::ptr
   throw NumericalError(-1, -1, "a diffusion solve failed on valid input");  // not reached
 }
 
-// to[0, W) = from[0, W), 64 bytes at a time, inline (std::copy of one row of a band called
-// memmove: 5% of the columns pass).
-template <int W>
-void copy_lanes(const float* from, float* to) {
-  static_assert(W % 16 == 0);
-  for (int l = 0; l < W; l += 16) __builtin_memcpy(to + l, from + l, 16 * sizeof(float));
-}
-
 // Fetches the cache lines of [p, p + count) into L2 ahead of their use.
 inline void prefetch_span(const float* p, std::ptrdiff_t count) {
   for (std::ptrdiff_t i = 0; i < count; i += 16) __builtin_prefetch(p + i, 0, 2);
@@ -242,8 +234,7 @@ void solve_column_segment(const Source& source, const PlaneStack<float>& dst,
   const std::ptrdiff_t n = s.end - s.begin;
   float* work = scratch;
   float* block_beta = work + detail::diffusion_lanes_workspace<float>(n, W, Rhs);
-  float* eliminated = block_beta + (kBlock + 1) * W;  // full bands: kBlock rows of Rhs planes of W lanes
-  float* padded = eliminated + kBlock * Rhs * W;  // partial bands: n rows of Rhs planes of W lanes
+  float* padded = block_beta + (kBlock + 1) * W;  // partial bands: n rows of Rhs planes of W lanes
   const bool full = count == W;
   if (!full)
     for (std::ptrdiff_t i = 0; i < n; ++i)
@@ -258,8 +249,13 @@ void solve_column_segment(const Source& source, const PlaneStack<float>& dst,
     const std::ptrdiff_t end = std::min(n, begin + kBlock);
     source.column_links(s.begin + begin, end - begin, x0, count, W, block_beta);
     if (full) {
-      // The eliminated values go to dst, through L1: a block is stored only once the sweep
-      // found it valid, so src (which dst may be) is intact where a bad value must be named.
+      // The eliminated values go straight to dst, in the rows the solution will overwrite.
+      // Should a value of src be bad, the first bad pixel by rows still holds a non-finite
+      // value there (NaN and infinity carry down each column), and the pixels before it in
+      // its column hold finite ones, so the search of src below names the same pixel when dst
+      // is src. (Through an L1 block copied once found valid, as before: the columns pass of
+      // 3840 x 2160 RGB on an Intel Xeon took 12.7 against 11.5 ms on 2 threads, 27.2 against
+      // 23.9 on one.)
       // The sweep goes kChunk rows at a time, each chunk fetching the rows one block below
       // it: the hardware prefetchers do not follow a walk down the image 256 bytes a row, and
       // a whole block's lines requested at once stall on the misses in flight (the ADI DOF,
@@ -273,12 +269,8 @@ void solve_column_segment(const Source& source, const PlaneStack<float>& dst,
         }
         sweep.forward_to(chunk, chunk_end, block_beta + (chunk - begin) * W, W,
                          src.row(c0, s.begin + chunk) + x0, src.pitch, src.plane_stride,
-                         eliminated + (chunk - begin) * Rhs * W, Rhs * W, W);
+                         dst.row(c0, s.begin + chunk) + x0, dst.pitch, dst.plane_stride);
       }
-      if (!sweep.healthy()) throw_first_bad_pixel(src, x0, x0 + count, s.begin, s.end);
-      for (std::ptrdiff_t i = begin; i < end; ++i)
-        for (int c = 0; c < Rhs; ++c)
-          copy_lanes<W>(eliminated + ((i - begin) * Rhs + c) * W, dst.row(c0 + c, s.begin + i) + x0);
     } else
       sweep.forward(begin, end, block_beta, W, padded + begin * Rhs * W, Rhs * W, W);
   }
@@ -305,7 +297,7 @@ void solve_column_segment(const Source& source, const PlaneStack<float>& dst,
 
 inline std::size_t column_scratch_floats(std::ptrdiff_t n) {
   return std::size_t(detail::diffusion_lanes_workspace<float>(n, kLanes, kMaxRhs) +
-                     (kBlock + 1) * kLanes + kBlock * kLanes * kMaxRhs + n * kMaxRhs * kLanes);
+                     (kBlock + 1) * kLanes + n * kMaxRhs * kLanes);
 }
 
 // Calls solve<Rhs>(c0) for planes [c0, c0 + Rhs), in groups of at most kMaxRhs.
