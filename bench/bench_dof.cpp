@@ -35,8 +35,10 @@
 // ratio. That keeps the matrix to a
 // few minutes; the excluded runs are those of the methods whose cost grows with the CoC squared
 // (scatter, mpad) on the large-CoC scenes at 4K.
-// The ADI target of the issue: copy_ratio <= 4 at 3840x2160 on 2 threads. BM_dof_adi_traffic is
-// the floor of its data movement (2.7-3.2 copies on this host), measured beside it.
+// The ADI target of the issue: adi <= 4x the copy at 3840x2160 on 2 threads. BM_dof_adi_traffic
+// is the floor of its data movement (2.5-3.2 copies on the hosts measured so far), measured
+// beside it. copy_ratio divides by one best-of-5 copy per process, which swings with the host's
+// memory; quote the ratio of BM_dof_adi's and BM_dof_copy's medians from the same run.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
