@@ -37,8 +37,11 @@
 // (scatter, mpad) on the large-CoC scenes at 4K.
 // The ADI target of the issue: adi <= 4x the copy at 3840x2160 on 2 threads. BM_dof_adi_traffic
 // is the floor of its data movement (2.5-3.2 copies on the hosts measured so far), measured
-// beside it. copy_ratio divides by one best-of-5 copy per process, which swings with the host's
-// memory; quote the ratio of BM_dof_adi's and BM_dof_copy's medians from the same run.
+// beside it. copy_ratio divides by one best-of-5 copy per process, taken when the image is not
+// in cache; BM_dof_copy's steady state can be faster (a host with a large last-level cache keeps
+// part of it there: 6.2 against 7.5 ms on an Intel Xeon), so quote the ratio of BM_dof_adi's
+// and BM_dof_copy's medians from the same run. (Measuring the copy again right after each
+// benchmark was tried: it read 3.3x where the medians gave 4.0x, for the same reason.)
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
