@@ -57,6 +57,28 @@ inline constexpr std::ptrdiff_t kTransposeBlock = 32;
 inline __mmask16 first_columns(std::ptrdiff_t columns) {
   return columns >= 16 ? __mmask16(0xFFFF) : __mmask16((1u << columns) - 1);
 }
+
+// to[j * stride] = r[j] for j < count, and r[j] = from[j * stride] for j < count (zero above).
+// The whole 16 on their own path: with a variable count GCC 12 tests j < count before every
+// row, a chain of 16 compares per 16 x 16 transpose (the ADI rows pass, 3840 x 2160 RGB, 2
+// threads of an Intel Xeon, 4 alternating runs: 11.6-11.8 -> 10.9-11.5 ms).
+[[gnu::always_inline]] inline void store_block_rows(const __m512 r[16], std::ptrdiff_t count,
+                                                    float* to, std::ptrdiff_t stride) {
+  if (count == 16) {
+    for (int j = 0; j < 16; ++j) _mm512_storeu_ps(to + j * stride, r[j]);
+    return;
+  }
+  for (std::ptrdiff_t j = 0; j < count; ++j) _mm512_storeu_ps(to + j * stride, r[j]);
+}
+[[gnu::always_inline]] inline void load_block_rows(const float* from, std::ptrdiff_t stride,
+                                                   std::ptrdiff_t count, __m512 r[16]) {
+  if (count == 16) {
+    for (int j = 0; j < 16; ++j) r[j] = _mm512_loadu_ps(from + j * stride);
+    return;
+  }
+  for (int j = 0; j < 16; ++j)
+    r[j] = j < count ? _mm512_loadu_ps(from + j * stride) : _mm512_setzero_ps();
+}
 #endif
 
 // block[k * W + l] = rows[l][x + k] for k < columns, l < W: W rows anywhere in memory (a band
@@ -83,7 +105,7 @@ inline void gather_into_lanes(const T* const* rows, std::ptrdiff_t x, std::ptrdi
         __m512 r[16];
         for (int j = 0; j < 16; ++j) r[j] = _mm512_maskz_loadu_ps(mask, rows[group + j] + x + k);
         transpose_16x16(r);
-        for (std::ptrdiff_t j = 0; j < width; ++j) _mm512_storeu_ps(block + (k + j) * W + group, r[j]);
+        store_block_rows(r, width, block + k * W + group, W);
       }
       continue;
     }
@@ -108,8 +130,7 @@ inline void scatter_from_lanes(const T* block, std::ptrdiff_t columns, T* const*
       const __mmask16 mask = first_columns(width);
       for (int group = 0; group < W; group += 16) {
         __m512 r[16];
-        for (std::ptrdiff_t j = 0; j < 16; ++j)
-          r[j] = j < width ? _mm512_loadu_ps(block + (k + j) * W + group) : _mm512_setzero_ps();
+        load_block_rows(block + k * W + group, W, width, r);
         transpose_16x16(r);
         for (int j = 0; j < 16; ++j) {
           float* to = rows[group + j] + x + k;
