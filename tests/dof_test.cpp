@@ -774,6 +774,20 @@ TEST(DofInput, NonFiniteCocNamesThePixel) {
         contains(invalid_argument_of([&] { run(method, color, coc); }).message, "pixel (5, 29)"));
 }
 
+// The diffusion methods check the CoC in their conductance scan, not in a pass of its own: a
+// CoC that is not finite, or so large that its conductance is not, is still named as the CoC's.
+TEST(DofInput, DiffusionMethodsNameABadCocAsTheCoc) {
+  const Image color = random_image(70, 40, 3, 0.f, 1.f, 4);
+  for (const float bad : {std::numeric_limits<float>::quiet_NaN(), -1e20f})
+    for (const char* name : {"adi", "mpad"}) {
+      Image coc = make_coc(70, 40, [](auto, auto) { return 3.f; });
+      coc(66, 38, 0) = bad;
+      const Thrown t = invalid_argument_of([&] { run(find_dof_method(name), color, coc); });
+      EXPECT_EQ(t.argument, "coc") << name << " " << bad;
+      EXPECT_TRUE(contains(t.message, "pixel (66, 38)")) << name << " " << t.message;
+    }
+}
+
 TEST(DofInput, CocOfWrongSizeRejected) {
   const Image color = random_image(40, 30, 3, 0.f, 1.f, 3);
   for (auto [w, h] : {std::pair{39, 30}, std::pair{40, 31}}) {

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <string>
 
 #include "tridiff/solvers/solve.hpp"
 #include "stage_clock.hpp"
@@ -145,11 +146,22 @@ void diffusion_dof(Image& out, const Image& color, ConstPlane coc, const DofSett
     validate_dof_input(color, coc);
     return layered_dof(out, color, coc, settings, report, diffuse, options);
   }
-  // The colour is checked by the diffuser where it passes (see Diffuser).
-  validate_coc(color, coc);
-
+  // The colour is checked by the diffuser where it passes (see Diffuser), and so is the CoC:
+  // a CoC that is not finite has no finite conductance, which the diffuser refuses before it
+  // writes anything. Its error names the diffuser's argument ("value"); it is named here as
+  // the CoC's, as every method names it.
+  validate_coc_size(color, coc);
   const DiffusionReport diffusion = timed(report, "diffusion", [&] {
-    return diffuse(out, color, coc, settings.in_focus_coc_px, options);
+    try {
+      return diffuse(out, color, coc, settings.in_focus_coc_px, options);
+    } catch (const InvalidArgument& error) {
+      if (error.argument() != "value") throw;
+      validate_coc(color, coc);  // names a CoC pixel that is not finite
+      // A finite CoC whose conductance is not (|CoC| above about 1e19 px).
+      const std::string what = error.what();
+      const std::size_t at = what.find("': ");
+      throw InvalidArgument("coc", -1, -1, at == std::string::npos ? what : what.substr(at + 3));
+    }
   });
   report.skipped_fraction = diffusion.skipped_fraction();
 }

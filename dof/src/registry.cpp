@@ -121,13 +121,17 @@ void validate_dof_input(const Image& color, ConstPlane coc) {
 }
 
 void validate_coc(const Image& color, ConstPlane coc) {
+  validate_coc_size(color, coc);
+  require_finite(coc, "coc", -1);
+}
+
+void validate_coc_size(const Image& color, ConstPlane coc) {
   if (coc.width() != color.width() || coc.height() != color.height())
     throw InvalidArgument("coc", -1, -1,
                           "is " + std::to_string(coc.width()) + " x " +
                               std::to_string(coc.height()) + ", the colour image is " +
                               std::to_string(color.width()) + " x " +
                               std::to_string(color.height()));
-  require_finite(coc, "coc", -1);
 }
 
 }  // namespace tridiff

@@ -65,8 +65,10 @@ const DofMethod& find_dof_method(std::string_view name);
 
 // Checks colour and CoC before a method runs: same size, every value finite (InvalidArgument
 // naming the pixel and channel otherwise). validate_coc checks the sizes and the CoC only,
-// for methods that check the colour as they go (adi checks every pixel it solves or copies).
+// for methods that check the colour as they go (adi checks every pixel it solves or copies);
+// validate_coc_size the sizes alone, for methods that check the CoC as they go too.
 void validate_dof_input(const Image& color, ConstPlane coc);
 void validate_coc(const Image& color, ConstPlane coc);
+void validate_coc_size(const Image& color, ConstPlane coc);
 
 }  // namespace tridiff
