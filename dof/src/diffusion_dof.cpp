@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <string>
 
 #include "tridiff/solvers/solve.hpp"
 #include "stage_clock.hpp"
@@ -158,9 +157,7 @@ void diffusion_dof(Image& out, const Image& color, ConstPlane coc, const DofSett
       if (error.argument() != "value") throw;
       validate_coc(color, coc);  // names a CoC pixel that is not finite
       // A finite CoC whose conductance is not (|CoC| above about 1e19 px).
-      const std::string what = error.what();
-      const std::size_t at = what.find("': ");
-      throw InvalidArgument("coc", -1, -1, at == std::string::npos ? what : what.substr(at + 3));
+      throw InvalidArgument("coc", error.system(), error.row(), error.message());
     }
   });
   report.skipped_fraction = diffusion.skipped_fraction();

@@ -22,10 +22,13 @@ class InvalidArgument : public Error {
                   const std::string& message)
       : Error(compose(argument, system, row, message)),
         argument_(std::move(argument)),
+        message_(message),
         system_(system),
         row_(row) {}
 
   const std::string& argument() const noexcept { return argument_; }
+  // What is wrong, without the argument, system and row that what() puts before it.
+  const std::string& message() const noexcept { return message_; }
   std::ptrdiff_t system() const noexcept { return system_; }
   std::ptrdiff_t row() const noexcept { return row_; }
 
@@ -39,6 +42,7 @@ class InvalidArgument : public Error {
   }
 
   std::string argument_;
+  std::string message_;
   std::ptrdiff_t system_;
   std::ptrdiff_t row_;
 };
