@@ -44,6 +44,16 @@ std::string message_of(const std::function<void()>& action) {
   return {};
 }
 
+// "(x, y)", as the errors name a pixel. (Appended piece by piece: "(" + std::string&& trips
+// GCC 12's false -Wrestrict warning.)
+std::string pixel_name(int x, int y) {
+  std::string name("(");
+  name += std::to_string(x);
+  name += ", ";
+  name += std::to_string(y);
+  return name += ")";
+}
+
 // Writes interleaved `pixels` (of buffer type `buffer`) straight through OpenImageIO, so that
 // reading is tested against files tridiff did not write.
 void write_with_oiio(const std::string& path, int width, int height,
@@ -365,6 +375,59 @@ TEST_F(ImageIo, ChannelNamesListTheFile) {
             (std::set<std::string>{"R", "G", "B", "Z"}));
 }
 
+TEST_F(ImageIo, NonFiniteColourIsRefusedNamingPixelAndChannel) {
+  struct Case {
+    float value;
+    int x, y, channel;  // channel of R, G, B, A
+    OIIO::TypeDesc type;
+    const char* words;
+  };
+  constexpr OIIO::TypeDesc::BASETYPE kFloat = OIIO::TypeDesc::FLOAT, kHalf = OIIO::TypeDesc::HALF;
+  const Case cases[] = {{kNaN, 3, 1, 1, kFloat, "pixel (3, 1) of channel 'G' is NaN"},
+                        {kInf, 0, 2, 2, kFloat, "pixel (0, 2) of channel 'B' is infinite"},
+                        {-kInf, 4, 0, 0, kFloat, "pixel (4, 0) of channel 'R' is infinite"},
+                        {kNaN, 2, 2, 3, kFloat, "pixel (2, 2) of channel 'A' is NaN"},
+                        {kInf, 1, 1, 0, kHalf, "pixel (1, 1) of channel 'R' is infinite"}};
+  for (const Case& bad : cases) {
+    SCOPED_TRACE(bad.words);
+    std::vector<float> pixels(5 * 3 * 4, 0.5f);
+    pixels[(bad.y * 5 + bad.x) * 4 + bad.channel] = bad.value;
+    write_floats(file("bad.exr"), 5, 3, {"R", "G", "B", "A"}, pixels, bad.type);
+    const std::string message = message_of([&] { read_color(file("bad.exr")); });
+    EXPECT_TRUE(contains(message, "bad.exr: " + std::string(bad.words)));
+  }
+}
+
+TEST_F(ImageIo, FiniteExtremesOfColourAreRead) {
+  // 0 * value is 0 for every finite value, however large or small: none may be refused.
+  constexpr float kMax = std::numeric_limits<float>::max();
+  constexpr float kTiny = std::numeric_limits<float>::denorm_min();
+  const std::vector<float> pixels = {kMax, -kMax, kTiny, -0.f, 0.f, 1.f};
+  write_floats(file("extremes.exr"), 2, 1, {"R", "G", "B"}, pixels);
+  const Image read = read_color(file("extremes.exr")).pixels;
+  for (int x = 0; x < 2; ++x)
+    for (int c = 0; c < 3; ++c) EXPECT_EQ(read(x, 0, c), pixels[x * 3 + c]) << x << "," << c;
+}
+
+// Float data forced through the sRGB curve: finite in the file, infinite once decoded (the
+// curve's power overflows float above about 1e16): refused, not passed on as infinity. 1e15
+// decodes to a finite (huge) value and is kept.
+TEST_F(ImageIo, ForcedSrgbThatOverflowsIsRefusedNamingThePixel) {
+  std::vector<float> pixels(4 * 2 * 3, 0.5f);
+  pixels[(1 * 4 + 2) * 3 + 1] = 1e20f;  // pixel (2, 1), G
+  write_floats(file("bright.exr"), 4, 2, {"R", "G", "B"}, pixels);
+  const std::string message =
+      message_of([&] { read_color(file("bright.exr"), ColorEncoding::Srgb); });
+  EXPECT_TRUE(contains(message, "bright.exr: pixel (2, 1) of channel 'G' is too large for the "
+                                "sRGB curve"))
+      << message;
+  EXPECT_EQ(read_color(file("bright.exr")).pixels(2, 1, 1), 1e20f);  // linear: as stored
+  pixels[(1 * 4 + 2) * 3 + 1] = 1e15f;
+  write_floats(file("bright.exr"), 4, 2, {"R", "G", "B"}, pixels);
+  const float decoded = read_color(file("bright.exr"), ColorEncoding::Srgb).pixels(2, 1, 1);
+  EXPECT_NEAR(decoded / std::pow(1e15 / 1.055, 2.4), 1.0, 1e-4);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Depth
 
@@ -378,13 +441,56 @@ TEST_F(ImageIo, DepthPicksZByDefault) {
     for (int x = 0; x < 6; ++x) EXPECT_EQ(depth(x, y, 0), 1.f + x + 10.f * y);
 }
 
-TEST_F(ImageIo, DepthFallsBackToDepthThenFirstChannel) {
+TEST_F(ImageIo, DepthFallsBackToDepthThenTheOnlyChannel) {
   write_depth_exr(file("rgbdepth.exr"), 2, 2, [](int x, int) { return 5.f + x; }, "depth");
   EXPECT_EQ(read_depth(file("rgbdepth.exr"))(1, 0, 0), 6.f);
 
   const std::vector<float> single = {4.f, 3.f};
   write_floats(file("single.exr"), 2, 1, {"distance"}, single);
   EXPECT_EQ(read_depth(file("single.exr"))(0, 0, 0), 4.f);
+}
+
+TEST_F(ImageIo, DepthFromDifferingColourChannelsIsRefused) {
+  // Grey everywhere but the last pixel: the whole image is checked, not a sample of it.
+  std::vector<float> pixels(4 * 3 * 3, 2.f);
+  pixels.back() = 3.f;
+  write_floats(file("rgb.exr"), 4, 3, {"R", "G", "B"}, pixels);
+  const std::string message = message_of([&] { read_depth(file("rgb.exr")); });
+  EXPECT_TRUE(contains(message, "rgb.exr: cannot tell which channel holds depth"));
+  EXPECT_TRUE(contains(message, "(channels: R, G, B)"));
+  EXPECT_TRUE(contains(message, "--depth-channel NAME"));
+}
+
+TEST_F(ImageIo, GreyRgbPngIsReadAsDepth) {
+  // A depth map saved as 8-bit RGBA: R = G = B = level, alpha opaque (and so unlike colour).
+  const int width = 4, height = 2;
+  std::vector<std::uint8_t> pixels;
+  for (int i = 0; i < width * height; ++i) {
+    const auto level = static_cast<std::uint8_t>(30 * i + 15);
+    pixels.insert(pixels.end(), {level, level, level, 255});
+  }
+  write_with_oiio(file("grey_depth.png"), width, height, {"R", "G", "B", "A"},
+                  OIIO::TypeDesc::UINT8, OIIO::TypeDesc::UINT8, pixels.data());
+  DepthOptions options;
+  options.convention = DepthConvention::Normalized;
+  options.near_plane = 1.f;
+  options.far_plane = 11.f;
+  const Image depth = read_depth(file("grey_depth.png"), options);
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      // Level 15 is 1 + 10 * 15 / 255 = 1.588 m, ..., level 225 is 9.824 m.
+      const float expected = 1.f + 10.f * static_cast<float>(30 * (y * width + x) + 15) / 255.f;
+      EXPECT_NEAR(depth(x, y, 0), expected, 1e-5f) << x << "," << y;
+    }
+}
+
+TEST_F(ImageIo, NaNInGreyDepthIsNamedAsNaN) {
+  // Equal NaNs across R, G, B keep the file grey; the depth check then names the pixel.
+  std::vector<float> pixels(3 * 2 * 3, 4.f);
+  for (int c = 0; c < 3; ++c) pixels[(1 * 3 + 2) * 3 + c] = kNaN;
+  write_floats(file("grey_nan.exr"), 3, 2, {"R", "G", "B"}, pixels);
+  EXPECT_TRUE(contains(message_of([&] { read_depth(file("grey_nan.exr")); }),
+                       "grey_nan.exr: pixel (2, 1) of channel 'R' is NaN"));
 }
 
 TEST_F(ImageIo, DepthByName) {
@@ -414,6 +520,30 @@ TEST_F(ImageIo, DepthNormalizedMapsToNearFar) {
   const std::string message = message_of([&] { read_depth(file("normalized.exr"), options); });
   EXPECT_TRUE(contains(message, "pixel (0, 0)"));
   EXPECT_TRUE(contains(message, "zero"));
+}
+
+TEST_F(ImageIo, DepthNormalizedOutsideUnitRangeIsRefused) {
+  struct Case {
+    float value;
+    int x, y;
+    const char* words;
+  };
+  // (Printed to float's max_digits10: -0.1f is -0.100000001.)
+  const Case cases[] = {{1.5f, 2, 1, "is 1.5;"}, {-0.1f, 0, 2, "is -0.100000001;"}};
+  DepthOptions options;
+  options.convention = DepthConvention::Normalized;
+  options.near_plane = 2.f;
+  options.far_plane = 10.f;
+  for (const Case& bad : cases) {
+    SCOPED_TRACE(bad.words);
+    write_depth_exr(file("bad.exr"), 4, 3, [&](int x, int y) {
+      return x == bad.x && y == bad.y ? bad.value : 0.5f;
+    });
+    const std::string message = message_of([&] { read_depth(file("bad.exr"), options); });
+    EXPECT_TRUE(contains(message, "bad.exr: pixel " + pixel_name(bad.x, bad.y) +
+                                      " of channel 'Z' " + bad.words));
+    EXPECT_TRUE(contains(message, "must lie in [0, 1]"));
+  }
 }
 
 TEST_F(ImageIo, DepthNormalizedNeedsValidPlanes) {
@@ -481,9 +611,8 @@ TEST_F(ImageIo, BadDepthValuesNameThePixel) {
       return x == bad.x && y == bad.y ? bad.value : 1.f;
     });
     const std::string message = message_of([&] { read_depth(name); });
-    const std::string pixel =
-        "(" + std::to_string(bad.x) + ", " + std::to_string(bad.y) + ")";
-    EXPECT_TRUE(contains(message, "bad.exr: pixel " + pixel + " of channel 'Z' " + bad.words));
+    EXPECT_TRUE(contains(message, "bad.exr: pixel " + pixel_name(bad.x, bad.y) +
+                                      " of channel 'Z' " + bad.words));
   }
 }
 
@@ -525,6 +654,20 @@ TEST_F(ImageIo, UnknownOutputExtensionWritesNothing) {
                        "out.xyz: unknown image format"));
   EXPECT_TRUE(contains(message_of([&] { write_image(file("noextension"), image); }),
                        "noextension: has no extension"));
+  EXPECT_TRUE(listing().empty());
+}
+
+// check_image_path refuses what write_image would, without an image and without touching
+// the disk; a writable path passes.
+TEST_F(ImageIo, CheckImagePathRefusesWhatWriteImageWould) {
+  EXPECT_TRUE(contains(message_of([&] { check_image_path(file("out.xyz")); }),
+                       "out.xyz: unknown image format"));
+  EXPECT_TRUE(contains(message_of([&] { check_image_path(file("noextension")); }),
+                       "noextension: has no extension"));
+  EXPECT_TRUE(contains(message_of([&] { check_image_path(file("absent/out.png")); }),
+                       "does not exist"));
+  EXPECT_NO_THROW(check_image_path(file("out.exr")));
+  EXPECT_NO_THROW(check_image_path(file("out.png")));
   EXPECT_TRUE(listing().empty());
 }
 

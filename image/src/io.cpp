@@ -12,8 +12,10 @@
 #include <cstdint>
 #include <filesystem>
 #include <limits>
+#include <optional>
 #include <sstream>
 #include <system_error>
+#include <utility>
 
 #include "tridiff/image/color.hpp"
 
@@ -112,12 +114,37 @@ std::vector<float> read_interleaved(OIIO::ImageInput& input, const std::string& 
   return pixels;
 }
 
-// dst(x, y) = pixels[(y * width + x) * stride + offset].
-void deinterleave(const std::vector<float>& pixels, int stride, int offset, Plane dst) {
+[[noreturn]] void fail_not_finite(const std::string& path, const std::string& channel,
+                                  std::ptrdiff_t x, std::ptrdiff_t y, float value) {
+  fail(path, "pixel (" + std::to_string(x) + ", " + std::to_string(y) + ") of channel " +
+                 quote(channel) + " is " + (std::isnan(value) ? "NaN" : "infinite") +
+                 "; colour must be finite");
+}
+
+// Where the first NaN or infinity of `plane` is, by rows, if it has one.
+std::optional<std::pair<std::ptrdiff_t, std::ptrdiff_t>> first_not_finite(ConstPlane plane) {
+  for (std::ptrdiff_t y = 0; y < plane.height(); ++y)
+    for (std::ptrdiff_t x = 0; x < plane.width(); ++x)
+      if (!std::isfinite(plane(x, y))) return std::pair{x, y};
+  return std::nullopt;
+}
+
+// dst(x, y) = pixels[(y * width + x) * stride + offset], refusing NaN and infinity: the DOF
+// methods skip in-focus tiles unread, so a bad value would otherwise reach the output unseen.
+// The check rides on the copy (a sum of 0 * value per row) rather than a pass of its own.
+void deinterleave_finite(const std::vector<float>& pixels, int stride, int offset, Plane dst,
+                         const std::string& path, const std::string& channel) {
   const float* source = pixels.data() + offset;
   for (std::ptrdiff_t y = 0; y < dst.height(); ++y) {
     float* row = dst.row(y);
-    for (std::ptrdiff_t x = 0; x < dst.width(); ++x, source += stride) row[x] = *source;
+    float probe = 0.f;  // zero unless a value of the row is NaN or infinite
+    for (std::ptrdiff_t x = 0; x < dst.width(); ++x, source += stride) {
+      row[x] = *source;
+      probe += 0.f * row[x];
+    }
+    if (probe == 0.f) continue;
+    for (std::ptrdiff_t x = 0; x < dst.width(); ++x)
+      if (!std::isfinite(row[x])) fail_not_finite(path, channel, x, y, row[x]);
   }
 }
 
@@ -133,11 +160,16 @@ struct ColorChannels {
   int alpha;
 };
 
+// The alpha channel the file declares, else one named "A", else -1.
+int alpha_channel_of(const OIIO::ImageSpec& spec) {
+  return spec.alpha_channel >= 0 && spec.alpha_channel < spec.nchannels ? spec.alpha_channel
+                                                                        : find_channel(spec, "A");
+}
+
 ColorChannels choose_color_channels(const OIIO::ImageSpec& spec) {
   const int n = spec.nchannels;
   const int r = find_channel(spec, "R"), g = find_channel(spec, "G"), b = find_channel(spec, "B");
-  int alpha = spec.alpha_channel >= 0 && spec.alpha_channel < n ? spec.alpha_channel
-                                                                  : find_channel(spec, "A");
+  int alpha = alpha_channel_of(spec);
   if (r >= 0 && g >= 0 && b >= 0) return {{r, g, b}, alpha};
   if (n >= 3) {
     // Unnamed (or oddly named) channels: the first three are colour, a fourth is alpha.
@@ -163,20 +195,63 @@ ColorEncoding detect_encoding(const OIIO::ImageSpec& spec, int channel) {
                                                                           : ColorEncoding::Srgb;
 }
 
-// The depth channel: the one asked for, else "Z", else "depth" (any case), else the first.
-int choose_depth_channel(const std::string& path, const OIIO::ImageSpec& spec,
-                         const std::string& wanted) {
+std::string channel_list(const OIIO::ImageSpec& spec) {
+  return "(channels: " + join(spec.channelnames) + ")";
+}
+
+// The depth channel that its name (or being alone) decides: the one asked for, else "Z", else
+// "depth" (any case), else the only channel; -1 when none does.
+int named_depth_channel(const std::string& path, const OIIO::ImageSpec& spec,
+                        const std::string& wanted) {
   if (!wanted.empty()) {
     const int channel = find_channel(spec, wanted);
-    if (channel < 0)
-      fail(path, "channel " + quote(wanted) + " not found (channels: " + join(spec.channelnames) +
-                     ")");
+    if (channel < 0) fail(path, "channel " + quote(wanted) + " not found " + channel_list(spec));
     return channel;
   }
   if (const int z = find_channel(spec, "Z"); z >= 0) return z;
   for (int c = 0; c < spec.nchannels; ++c)
     if (lowercase(spec.channelnames[c]) == "depth") return c;
-  return 0;
+  return spec.nchannels == 1 ? 0 : -1;
+}
+
+// Equal, counting NaN as equal to NaN: a NaN in a grey depth map is for the depth check to
+// name, not a sign that the channels differ.
+bool same_value(float a, float b) { return a == b || (std::isnan(a) && std::isnan(b)); }
+
+// The first colour channel of a grey image stored as several channels (all but alpha equal at
+// every pixel, as in a depth map saved as RGB PNG). Any other unnamed choice would be a guess,
+// and a guess of R from a colour image makes a plausible-looking but wrong depth: refused.
+int grey_channel(const std::string& path, const OIIO::ImageSpec& spec,
+                 const std::vector<float>& pixels) {
+  const int n = spec.nchannels, alpha = alpha_channel_of(spec);
+  std::vector<int> colour;
+  for (int c = 0; c < n; ++c)
+    if (c != alpha) colour.push_back(c);
+  for (std::size_t pixel = 0; pixel < pixels.size(); pixel += static_cast<std::size_t>(n))
+    for (const int c : colour)
+      if (!same_value(pixels[pixel + c], pixels[pixel + colour[0]]))
+        fail(path, "cannot tell which channel holds depth: none is named Z or depth, and the "
+                   "channels are not one grey image " + channel_list(spec) +
+                   "; choose one with --depth-channel NAME");
+  return colour[0];
+}
+
+// The stored values of the depth channel: pixels[i * stride + offset] for pixel i.
+struct DepthValues {
+  int channel;  // in the file
+  std::vector<float> pixels;
+  int stride, offset;
+};
+
+DepthValues read_depth_values(OIIO::ImageInput& input, const std::string& path,
+                              const std::string& wanted) {
+  const OIIO::ImageSpec& spec = input.spec();
+  if (const int channel = named_depth_channel(path, spec, wanted); channel >= 0)
+    return {channel, read_interleaved(input, path, channel, channel + 1), 1, 0};
+  // Only the pixels can tell whether the file is grey: read every channel, once.
+  std::vector<float> pixels = read_interleaved(input, path, 0, spec.nchannels);
+  const int channel = grey_channel(path, spec, pixels);
+  return {channel, std::move(pixels), spec.nchannels, channel};
 }
 
 std::string format_value(float value) {
@@ -228,18 +303,30 @@ const char* convention_name(DepthConvention convention) {
   return "linear";
 }
 
+// Outside [0, 1] a normalized value lies before the near plane or beyond the far one: the
+// planes were wrong for this file, and the mapping would hide it (or make a negative distance).
+bool normalized_in_range(float value) { return value >= 0.f && value <= 1.f; }
+
+bool usable_depth(float value, float distance, DepthConvention convention) {
+  if (convention == DepthConvention::Normalized && !normalized_in_range(value)) return false;
+  return std::isfinite(distance) && distance > 0.f;
+}
+
 [[noreturn]] void fail_depth(const std::string& path, const std::string& channel, std::ptrdiff_t x,
                              std::ptrdiff_t y, float value, float distance,
                              DepthConvention convention) {
-  std::string message = "pixel (" + std::to_string(x) + ", " + std::to_string(y) +
-                        ") of channel " + quote(channel) + " is ";
+  const std::string pixel = "pixel (" + std::to_string(x) + ", " + std::to_string(y) +
+                            ") of channel " + quote(channel) + " is ";
   // Name the stored value when it is itself the problem, else what the conversion made of it.
   if (convention == DepthConvention::Linear || std::isnan(value) || std::isinf(value))
-    message += describe_bad(value);
-  else
-    message += format_value(value) + ", a distance that is " + describe_bad(distance) +
-               " under the " + convention_name(convention) + " convention";
-  fail(path, message + "; depth must be finite and > 0");
+    fail(path, pixel + describe_bad(value) + "; depth must be finite and > 0");
+  if (convention == DepthConvention::Normalized && !normalized_in_range(value))
+    fail(path, pixel + format_value(value) +
+                   "; under the normalized convention a depth value must lie in [0, 1] (0 at "
+                   "the near plane, 1 at the far plane)");
+  fail(path, pixel + format_value(value) + ", a distance that is " + describe_bad(distance) +
+                 " under the " + convention_name(convention) +
+                 " convention; depth must be finite and > 0");
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -277,8 +364,7 @@ OutputFormat choose_output_format(const std::string& extension, const Image& ima
 }
 
 // Refuses, before any file is touched, what would fail late or not at all in the writer.
-void check_output(const std::string& path, const std::string& extension, const Image& image) {
-  if (image.empty()) throw InvalidArgument("image", -1, -1, "is empty");
+void check_path(const std::string& path, const std::string& extension) {
   if (extension.empty())
     fail(path, "has no extension to choose the image format from (.png, .jpg, .tif, .exr ...)");
   // OpenImageIO picks the writer from the extension alone, without touching the disk.
@@ -291,6 +377,11 @@ void check_output(const std::string& path, const std::string& extension, const I
   const fs::path folder = fs::path(path).parent_path();
   if (!folder.empty() && !fs::is_directory(folder, error))
     fail(path, "folder " + quote(folder.string()) + " does not exist");
+}
+
+void check_output(const std::string& path, const std::string& extension, const Image& image) {
+  if (image.empty()) throw InvalidArgument("image", -1, -1, "is empty");
+  check_path(path, extension);
   if (extension == "jpg" || extension == "jpeg" || extension == "jpe" || extension == "jfif") {
     // libjpeg ends the whole process on an oversized image instead of returning an error.
     if (image.width() > 65500 || image.height() > 65500)
@@ -404,12 +495,25 @@ ColorImage read_color(const std::string& path, ColorEncoding encoding) {
 
   const int stride = last + 1 - first;
   Image image(spec.width, spec.height, chosen.alpha >= 0 ? 4 : 3);
-  for (int c = 0; c < 3; ++c) deinterleave(pixels, stride, chosen.rgb[c] - first, image.plane(c));
-  if (chosen.alpha >= 0) deinterleave(pixels, stride, chosen.alpha - first, image.plane(3));
+  const auto copy = [&](int channel, int plane) {
+    deinterleave_finite(pixels, stride, channel - first, image.plane(plane), path,
+                        spec.channelnames[channel]);
+  };
+  for (int c = 0; c < 3; ++c) copy(chosen.rgb[c], c);
+  if (chosen.alpha >= 0) copy(chosen.alpha, 3);
 
   const ColorEncoding held =
       encoding == ColorEncoding::Auto ? detect_encoding(spec, chosen.rgb[0]) : encoding;
-  if (held == ColorEncoding::Srgb) srgb_to_linear(image);
+  if (held == ColorEncoding::Srgb) {
+    srgb_to_linear(image);
+    // Float data forced through the sRGB curve overflows it above about 1e16.
+    if (spec.format.is_floating_point())
+      for (int c = 0; c < 3; ++c)
+        if (const auto at = first_not_finite(image.plane(c)))
+          fail(path, "pixel (" + std::to_string(at->first) + ", " + std::to_string(at->second) +
+                         ") of channel " + quote(spec.channelnames[chosen.rgb[c]]) +
+                         " is too large for the sRGB curve (it decodes to infinity)");
+  }
   return {std::move(image), held};
 }
 
@@ -417,21 +521,23 @@ Image read_depth(const std::string& path, const DepthOptions& options) {
   check_depth_options(options);
   const auto input = open_input(path);
   const OIIO::ImageSpec& spec = input->spec();
-  const int channel = choose_depth_channel(path, spec, options.channel);
-  const std::vector<float> values = read_interleaved(*input, path, channel, channel + 1);
+  const DepthValues values = read_depth_values(*input, path, options.channel);
 
   Image depth(spec.width, spec.height, 1);
   const Plane plane = depth.plane(0);
-  const float* value = values.data();
+  const float* value = values.pixels.data() + values.offset;
   for (std::ptrdiff_t y = 0; y < plane.height(); ++y)
-    for (std::ptrdiff_t x = 0; x < plane.width(); ++x, ++value) {
+    for (std::ptrdiff_t x = 0; x < plane.width(); ++x, value += values.stride) {
       const float distance = to_distance(*value, options);
-      if (!(std::isfinite(distance) && distance > 0.f))
-        fail_depth(path, spec.channelnames[channel], x, y, *value, distance, options.convention);
+      if (!usable_depth(*value, distance, options.convention))
+        fail_depth(path, spec.channelnames[values.channel], x, y, *value, distance,
+                   options.convention);
       plane(x, y) = distance;
     }
   return depth;
 }
+
+void check_image_path(const std::string& path) { check_path(path, extension_of(path)); }
 
 void write_image(const std::string& path, const Image& image, ColorEncoding encoding) {
   const std::string extension = extension_of(path);

@@ -30,7 +30,9 @@ struct ColorImage {
 };
 
 // Reads the colour channels of `path` (R, G, B[, A]; a one-channel file is grey and is
-// expanded to RGB) and converts them to linear light.
+// expanded to RGB) and converts them to linear light. Every value read is finite: a NaN or an
+// infinity in the file (only half and float data can hold one) is an ImageIoError naming the
+// file, the pixel and the channel.
 ColorImage read_color(const std::string& path, ColorEncoding encoding = ColorEncoding::Auto);
 
 // How the values of a depth channel map to distance from the camera.
@@ -42,13 +44,16 @@ enum class DepthConvention {
 
 struct DepthOptions {
   std::string channel;  // channel name ("Z", "depth", "A", ...); empty: "Z" if present, else
-                        // "depth", else the first channel
+                        // "depth" (any case), else the only channel, else the first colour
+                        // channel of a grey image (all channels but alpha equal at every
+                        // pixel); any other file is an error listing its channels
   DepthConvention convention = DepthConvention::Linear;
   float near_plane = 0.f, far_plane = 0.f;  // for Normalized
 };
 
 // Reads one channel of `path` as linear distance (one-channel image). Every value must be
-// finite and positive after conversion; otherwise the error names the file and pixel.
+// finite and positive after conversion, and a Normalized value must lie in [0, 1]; otherwise
+// the error names the file, channel and pixel.
 Image read_depth(const std::string& path, const DepthOptions& options = {});
 
 // Writes `image` (linear light) to `path`, format from the extension (.png .jpg .tif .exr
@@ -57,6 +62,11 @@ Image read_depth(const std::string& path, const DepthOptions& options = {});
 // and renames it over `path`: the file is whole or absent.
 void write_image(const std::string& path, const Image& image,
                  ColorEncoding encoding = ColorEncoding::Auto);
+
+// Refuses (ImageIoError naming the file) a path write_image cannot write whatever the image:
+// no extension, a format OpenImageIO has no writer for, a folder, a folder that does not
+// exist. Touches nothing on disk: a program checks its outputs with it before long work.
+void check_image_path(const std::string& path);
 
 // Channel names of `path` (for error messages and --help listings).
 std::vector<std::string> channel_names(const std::string& path);
