@@ -751,6 +751,30 @@ TEST(Diffusion, DiffuseExplicitSubstepsLargeBetaWithoutBlowingUp) {
     }
 }
 
+// The sub-step count has a ceiling (DiffusionOptions::max_explicit_steps): a field that needs
+// more is refused naming beta, not run for hours, and a huge conductance (whose step count
+// does not fit an int) is refused rather than overflowing into a count of 1 or less.
+TEST(Diffusion, DiffuseExplicitRefusesMoreStepsThanAllowed) {
+  const Size size{9, 7};
+  const Image src = random_image(size, 1, 84);
+  Image dst;
+  DiffusionOptions options;
+  options.max_explicit_steps = 3;
+  int steps = 0;
+  diffuse_explicit(dst, src, uniform_links(size, 0.75f), options, &steps);  // exactly 3 steps
+  EXPECT_EQ(steps, 3);
+  const Thrown four = invalid_argument_of(
+      [&] { diffuse_explicit(dst, src, uniform_links(size, 0.76f), options, &steps); });
+  EXPECT_EQ(four.argument, "beta");
+  EXPECT_TRUE(contains(four.message, "4 explicit steps")) << four.message;
+  EXPECT_TRUE(contains(four.message, "3 allowed")) << four.message;
+  for (const float huge : {1e9f, 1e30f, std::numeric_limits<float>::max()}) {
+    const Thrown thrown =
+        invalid_argument_of([&] { diffuse_explicit(dst, src, uniform_links(size, huge)); });
+    EXPECT_EQ(thrown.argument, "beta") << huge;
+  }
+}
+
 // ---------------------------------------------------------------------------------------------
 // 9. Both schemes integrate dI/dt = -L I (seed 000 eq. 3.8 with gamma = 1) over unit time, whose
 // exact solution is exp(-L) I, computed here by Eigen's matrix exponential in long double. N

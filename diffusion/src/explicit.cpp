@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <sstream>
 #include <string>
 #include <utility>
 
@@ -110,6 +111,21 @@ std::ptrdiff_t run_steps(Plane dst, ConstPlane src, const LinkField& kappa, int 
   return moving_pixels * steps;
 }
 
+// Sub-steps that keep every link within the stability bound, counted in double (an int
+// would overflow for a large conductance) and refused above the caller's limit.
+int explicit_steps_for(float max_link, int max_steps) {
+  const double steps = std::max(1.0, std::ceil(double(max_link) / kExplicitStabilityBound));
+  if (steps > max_steps) {
+    std::ostringstream message;
+    message << "the largest conductance " << max_link << " needs " << steps
+            << " explicit steps, more than the " << max_steps
+            << " allowed (DiffusionOptions::max_explicit_steps); an implicit (ADI) step blurs "
+               "this far in one";
+    throw InvalidArgument("beta", -1, -1, message.str());
+  }
+  return int(steps);
+}
+
 }  // namespace
 
 DiffusionReport diffuse_explicit_steps(Image& dst, const Image& src, const LinkField& kappa,
@@ -135,7 +151,7 @@ DiffusionReport diffuse_explicit_steps(Image& dst, const Image& src, const LinkF
 
 DiffusionReport diffuse_explicit(Image& dst, const Image& src, const LinkField& beta,
                                  const DiffusionOptions& options, int* steps_taken) {
-  const int steps = std::max(1, int(std::ceil(beta.max_link() / kExplicitStabilityBound)));
+  const int steps = explicit_steps_for(beta.max_link(), options.max_explicit_steps);
   if (steps_taken) *steps_taken = steps;
   LinkField kappa(beta.width(), beta.height());
   const float scale = 1.f / float(steps);

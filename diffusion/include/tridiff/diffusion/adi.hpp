@@ -15,6 +15,9 @@ struct DiffusionOptions {
   int threads = 0;            // 0: all cores
   bool skip_inactive = true;  // false solves every row and column in full (the reference path)
   std::function<void(double)> progress;  // called with the fraction done (0..1); may be empty
+  // diffuse_explicit refuses a field that needs more sub-steps than this (a blur that large is
+  // the implicit method's work; 2^14 steps cover a CoC of 360 px by adi_beta_for_coc).
+  int max_explicit_steps = 1 << 14;
 };
 
 // What a diffusion call did: pixel visits per pass, summed over passes and channels.
