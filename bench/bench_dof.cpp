@@ -14,8 +14,8 @@
 //                                               in focus are not even copied. Each run blurs
 //                                               the last one's output again (the work is the
 //                                               same: it depends on the CoC only)
-// for sizes 1024x1024 and 3840x2160 and threads 1 and 2. What is timed is the method alone: the
-// scene's colour and CoC are made once, before timing, and cached.
+// for sizes 1024x1024, 2048x2048 and 3840x2160 and threads 1 and 2. What is timed is the method
+// alone: the scene's colour and CoC are made once, before timing, and cached.
 // Counters:
 //   copy_ratio        time / the copy time of the same image at the same thread count
 //                     (the copy measured once per size and thread count, best of 5)
@@ -26,7 +26,7 @@
 //   leakage_vs_scatter
 //                     dof_error() (tridiff/dof/quality.hpp) of the method's output against the
 //                     `scatter` reference with 2 threads, measured on the scene at 1024^2 once
-//                     per method and scene, and reported on the rows of both sizes: the
+//                     per method and scene, and reported on the rows of every size: the
 //                     reference is slow, and the scenes are the same at every size (their CoC
 //                     in pixels does not scale, except `procedural`'s)
 // Cost guard: a method x scene x size whose one run is estimated to take more than
@@ -310,7 +310,8 @@ void bm_in_place(benchmark::State& state, const DofMethod& method, int focus_per
 }
 
 void register_all() {
-  const std::pair<std::ptrdiff_t, std::ptrdiff_t> sizes[] = {{1024, 1024}, {3840, 2160}};
+  const std::pair<std::ptrdiff_t, std::ptrdiff_t> sizes[] = {
+      {1024, 1024}, {2048, 2048}, {3840, 2160}};
   auto add = [](const std::string& name, auto&&... args) {
     benchmark::RegisterBenchmark(name.c_str(), args...)
         ->UseRealTime()

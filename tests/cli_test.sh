@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Tests of the `tridiff` command line, run by CTest:
 #   cli_test.sh TRIDIFF_BINARY WORK_DIR CASE
-# CASE is one of: help, dof, roundtrip, errors, ipf. Every check prints what it ran and what it saw
-# when it fails; the script exits non-zero if any check failed.
+# CASE is one of: help, dof, roundtrip, errors, outputs, ipf. Every check prints what it ran
+# and what it saw when it fails; the script exits non-zero if any check failed.
 set -u
 
 tridiff=$1
@@ -215,9 +215,35 @@ errors)
   expect_in "$err" "5, 7" "negative depth (pixel 5, 7)"
   expect_only_files "$d"
 
+  # NaN colour: refused on reading (the default method, in place, would skip it unread).
+  oiiotool --pattern constant:color=0.3,0.5,0.7 160x90 3 --fill:color=nan,nan,nan 1x1+5+7 \
+    -d float -o "$work/nan_color.exr" || fail "oiiotool"
+  run dof --color "$work/nan_color.exr" --depth "$work/depth.exr" -o "$d/x.png"
+  expect_status nonzero "NaN colour"
+  expect_in "$err" "nan_color.exr: pixel (5, 7) of channel 'R' is NaN" "NaN colour"
+  expect_only_files "$d"
+
+  # A colour image as depth, no channel named: which channel is depth cannot be guessed.
+  run dof --color "$work/color.exr" --depth "$work/color.exr" -o "$d/x.png"
+  expect_status nonzero "depth from an RGB file without --depth-channel"
+  expect_in "$err" "--depth-channel" "depth from an RGB file without --depth-channel"
+  expect_in "$err" "R, G, B" "depth from an RGB file without --depth-channel"
+  expect_only_files "$d"
+
   run dof --width 32 --height 18 --bogus 1 -o "$d/x.png"
   expect_status nonzero "unknown option"
   expect_in "$err" "--bogus" "unknown option"
+
+  run dof --width 32 --height 18 --threads 1e12 -o "$d/x.png"
+  expect_status nonzero "--threads beyond int"
+  expect_in "$err" "--threads" "--threads beyond int"
+  expect_in "$err" "out of range" "--threads beyond int"
+  expect_only_files "$d"
+
+  run dof --width 32 --height 18 --f-number -1 -o "$d/x.png"
+  expect_status nonzero "--f-number -1"
+  expect_in "$err" "--f-number" "--f-number -1 (named as the option)"
+  expect_only_files "$d"
 
   run dof --width 32 --height 18 --threads
   expect_status nonzero "option without its value"
@@ -227,6 +253,60 @@ errors)
   run dof --color "$work/color.exr" --depth "$work/depth.exr" -o "$d/ok.png"
   expect_status 0 "valid files"
   expect_file "$d/ok.png" "valid files"
+  ;;
+
+outputs)
+  # The files of one run are written whole or not at all, as a set: every path is checked
+  # before the work, and nothing is renamed into place until every file is written.
+  d=$work/o
+  mkdir -p "$d"
+  run dof --width 32 --height 18 -o "$d/x.png" --coc-output "$work/no/such/folder/c.png"
+  expect_status nonzero "--coc-output in a missing folder"
+  expect_in "$err" "--coc-output" "--coc-output in a missing folder"
+  expect_only_files "$d"
+  run dof --width 32 --height 18 -o "$d/x.png" --report "$work/no/such/folder/r.json"
+  expect_status nonzero "--report in a missing folder"
+  expect_in "$err" "--report" "--report in a missing folder"
+  expect_only_files "$d"
+  mkdir "$d/r.json"
+  run dof --width 32 --height 18 -o "$d/x.png" --report "$d/r.json"
+  expect_status nonzero "--report naming a folder"
+  expect_in "$err" "is a folder" "--report naming a folder"
+  expect_only_files "$d" r.json
+  rmdir "$d/r.json"
+  run dof --width 32 --height 18 -o "$d/x.png" --coc-output "$d/./x.png"
+  expect_status nonzero "--coc-output the same file as --output"
+  expect_in "$err" "--output" "--coc-output the same file as --output"
+  expect_only_files "$d"
+  run dof --width 32 --height 18 -o "$d/x.unknownformat"
+  expect_status nonzero "an output format OpenImageIO cannot write"
+  expect_in "$err" "$d/x.unknownformat" "an output format OpenImageIO cannot write"
+  expect_only_files "$d"
+  # A huge blur for explicit diffusion is refused before any output exists.
+  run dof --width 32 --height 18 --method mpad --far-start 1 --far-end 1.5 --far-radius 1e6 \
+    -o "$d/x.png"
+  expect_status nonzero "mpad asked for 5e11 explicit steps"
+  expect_in "$err" "explicit steps" "mpad asked for 5e11 explicit steps"
+  expect_only_files "$d"
+
+  # Names with quotes still make valid JSON; the EXR CoC map holds the signed diameters.
+  run dof --width 160 --height 90 -o "$d/q\"x.png" --coc-output "$d/coc.exr" --report "$d/r\"q.json"
+  expect_status 0 "outputs named with quotes"
+  expect_only_files "$d" 'q"x.png' coc.exr 'r"q.json'
+  if command -v python3 >/dev/null; then
+    python3 -c 'import json, sys; json.load(open(sys.argv[1]))' "$d/r\"q.json" ||
+      fail "the report of outputs named with quotes is not valid JSON"
+  fi
+  if command -v oiiotool >/dev/null; then
+    stats=$(oiiotool --stats "$d/coc.exr" 2>&1 | tr -s ' ')
+    expect_in "$stats" "1 channel" "CoC EXR"
+    # The built-in scene has a near twig (negative CoC) and a far background (positive).
+    min=$(echo "$stats" | sed -n 's/.*Stats Min: \([-0-9.e]*\).*/\1/p')
+    max=$(echo "$stats" | sed -n 's/.*Stats Max: \([-0-9.e]*\).*/\1/p')
+    if ! awk -v lo="$min" -v hi="$max" 'BEGIN { exit !(lo < -1 && hi > 1) }'; then
+      fail "CoC EXR: signed range [$min, $max] expected to reach below -1 and above 1 px"
+    fi
+  fi
   ;;
 
 ipf)

@@ -35,6 +35,10 @@ float Arguments::number(const std::string& key, float fallback) const {
 int Arguments::integer(const std::string& key, int fallback) const {
   const float value = number(key, float(fallback));
   if (value != std::floor(value)) throw InvalidArgument("--" + key, -1, -1, "must be an integer");
+  // Converting a float beyond int's range is undefined: refuse it first.
+  constexpr float kLimit = 2147483648.f;  // 2^31
+  if (!(value >= -kLimit && value < kLimit))
+    throw InvalidArgument("--" + key, -1, -1, "'" + text(key, "") + "' is out of range");
   return int(value);
 }
 
@@ -48,7 +52,8 @@ const std::vector<std::string> kInputOptions = {
 const char* const kInputUsage = R"(input
   --color FILE              colour image (PNG, JPEG, TIFF, OpenEXR, ...)
   --depth FILE              depth map; may be the colour file itself (an EXR with a Z channel)
-  --depth-channel NAME      channel holding depth (default: Z, else depth, else the first)
+  --depth-channel NAME      channel holding depth (default: Z, else depth, else the only
+                            channel, or the first of a grey image stored as RGB)
   --depth-convention C      linear (distance, default) | normalized (needs --near, --far) | inverse
   --near M, --far M         planes for the normalized convention, metres
   --color-encoding E        auto (default: 8/16-bit sRGB, float linear) | srgb | linear
@@ -58,7 +63,8 @@ lens (thin lens, seed 000 eq. 3.2)
   --f-number N              aperture f-number (default 2.8; built-in scene: 1.8)
   --focal-length MM         focal length (default 50)
   --sensor-width MM         sensor width the image spans (default 36)
-  --max-coc PX              clamp of the circle of confusion diameter (default 64)
+  --max-coc PX              clamp of the lens's CoC diameter (default 64; the artist
+                            curve's radii are its own bound)
 artist curve (seed 002 §28.5.3; replaces the lens when any is given)
   --near-start M --near-end M --near-radius PX   near blur: radius at near-start, 0 from near-end
   --far-start M --far-end M --far-radius PX      far blur: 0 up to far-start, radius from far-end
@@ -139,6 +145,21 @@ void load_images(const Arguments& args, int threads, Frame& frame, ThinLens& len
   frame.source = "built-in scene " + std::to_string(width) + " x " + std::to_string(height);
 }
 
+// The library names a lens or curve parameter by its field (f_number); the user typed an
+// option (--f-number): the same error, named as the option.
+template <class Body>
+void with_options_named(Body&& body) {
+  try {
+    body();
+  } catch (const InvalidArgument& error) {
+    std::string option = error.argument();
+    std::replace(option.begin(), option.end(), '_', '-');
+    if (std::find(kInputOptions.begin(), kInputOptions.end(), option) == kInputOptions.end())
+      throw;
+    throw InvalidArgument("--" + option, -1, -1, error.message());
+  }
+}
+
 // The thin lens, or the artist curve when any of its options is given.
 void compute_coc(const Arguments& args, int threads, ThinLens lens, Frame& frame) {
   frame.coc.reset(frame.color.width(), frame.color.height(), 1);
@@ -153,7 +174,7 @@ void compute_coc(const Arguments& args, int threads, ThinLens lens, Frame& frame
     c.far_start_m = args.number("far-start", 0);
     c.far_end_m = args.number("far-end", 0);
     c.far_radius_px = args.number("far-radius", 0);
-    coc_artist_curve(frame.coc.plane(0), frame.depth.plane(0), c, threads);
+    with_options_named([&] { coc_artist_curve(frame.coc.plane(0), frame.depth.plane(0), c, threads); });
     model << "artist curve: near " << c.near_start_m << "-" << c.near_end_m << " m radius "
           << c.near_radius_px << " px, far " << c.far_start_m << "-" << c.far_end_m << " m radius "
           << c.far_radius_px << " px";
@@ -163,7 +184,7 @@ void compute_coc(const Arguments& args, int threads, ThinLens lens, Frame& frame
     lens.focal_length_mm = args.number("focal-length", lens.focal_length_mm);
     lens.sensor_width_mm = args.number("sensor-width", lens.sensor_width_mm);
     lens.max_coc_px = args.number("max-coc", lens.max_coc_px);
-    coc_thin_lens(frame.coc.plane(0), frame.depth.plane(0), lens, threads);
+    with_options_named([&] { coc_thin_lens(frame.coc.plane(0), frame.depth.plane(0), lens, threads); });
     model << "thin lens: focus " << lens.focus_distance_m << " m, f/" << lens.f_number << ", "
           << lens.focal_length_mm << " mm, sensor " << lens.sensor_width_mm << " mm, max CoC "
           << lens.max_coc_px << " px";

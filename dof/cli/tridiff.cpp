@@ -2,6 +2,8 @@
 // built-in procedural scene), with any registered method.
 #include <unistd.h>
 
+#include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -36,7 +38,8 @@ constexpr const char* kDofUsage = R"(method
   --threads N               0 = all cores (default)
 output
   -o, --output FILE         result image (default tridiff_dof.png)
-  --coc-output FILE         CoC map image (default: <output stem>_coc.png)
+  --coc-output FILE         CoC map (default: <output stem>_coc.png): in .exr the signed
+                            diameter in pixels, one channel; else a false-colour picture
   --input-output FILE       also write the input colour (useful with the built-in scene)
   --report FILE             the report as JSON as well as on stdout
 )";
@@ -82,17 +85,124 @@ std::function<void(double)> progress_bar() {
   };
 }
 
-void write_text_atomically(const std::string& path, const std::string& text) {
-  const std::string temporary = path + ".tmp-" + std::to_string(getpid());
-  {
-    std::ofstream out(temporary);
-    out << text;
-    if (!out.flush()) {
-      std::filesystem::remove(temporary);
-      throw ImageIoError("tridiff: " + path + ": cannot write the report");
+namespace fs = std::filesystem;
+
+// The files of one run, written whole or not at all as a set: each is written to a temporary
+// file beside its target, and only once every one is written are they renamed into place
+// (a rename within a folder needs no space and does not fail half-way). A run that fails
+// before commit() leaves no new file behind.
+class OutputFiles {
+ public:
+  OutputFiles() = default;
+  OutputFiles(const OutputFiles&) = delete;
+  OutputFiles& operator=(const OutputFiles&) = delete;
+  ~OutputFiles() {
+    std::error_code ignored;
+    for (const Staged& file : files_)
+      if (!file.committed) fs::remove(file.temporary, ignored);
+  }
+
+  // Claims `path` for `option` before any work is done: refuses a path another option
+  // already claimed, a folder, a folder that does not exist or cannot be written.
+  void claim(const std::string& option, const std::string& path, bool image = true) {
+    if (path.empty()) throw InvalidArgument(option, -1, -1, "is empty");
+    std::error_code error;
+    if (fs::is_directory(path, error))
+      throw InvalidArgument(option, -1, -1, "'" + path + "' is a folder");
+    const fs::path target = fs::weakly_canonical(fs::absolute(path), error);
+    for (const Staged& file : files_)
+      if (file.target == target)
+        throw InvalidArgument(option, -1, -1, "'" + path + "' is also the " + file.option + " file");
+    const fs::path folder = target.parent_path();
+    if (!fs::is_directory(folder, error))
+      throw InvalidArgument(option, -1, -1, "'" + path + "': the folder " + folder.string() +
+                                                " does not exist");
+    if (image) check_image_path(path);  // a format OpenImageIO can write
+    // The extension stays last: OpenImageIO picks the format from it.
+    const fs::path temporary = folder / ("." + target.stem().string() + ".partial-" +
+                                         std::to_string(getpid()) + target.extension().string());
+    files_.push_back({option, path, target, temporary, false});
+    if (!std::ofstream(temporary))  // proves the folder writable now, not after the work
+      throw InvalidArgument(option, -1, -1, "'" + path + "': cannot write in " + folder.string());
+  }
+
+  void write_image(const std::string& option, const Image& image,
+                   ColorEncoding encoding = ColorEncoding::Auto) {
+    const Staged& file = find(option);
+    try {
+      tridiff::write_image(file.temporary.string(), image, encoding);
+    } catch (const ImageIoError& error) {
+      // Name the file the user asked for, not the temporary one.
+      std::string message = error.what();
+      const std::string temporary = file.temporary.string();
+      for (auto at = message.find(temporary); at != std::string::npos;
+           at = message.find(temporary, at + file.path.size()))
+        message.replace(at, temporary.size(), file.path);
+      throw ImageIoError(message);
     }
   }
-  std::filesystem::rename(temporary, path);
+
+  void write_text(const std::string& option, const std::string& text) {
+    const Staged& file = find(option);
+    std::ofstream out(file.temporary);
+    out << text;
+    if (!out.flush()) throw ImageIoError("tridiff: " + file.path + ": cannot write");
+  }
+
+  void commit() {
+    for (Staged& file : files_) {
+      std::error_code error;
+      fs::rename(file.temporary, file.target, error);
+      if (error)
+        throw ImageIoError("tridiff: " + file.path + ": cannot replace the file (" +
+                           error.message() + ")");
+      file.committed = true;
+    }
+  }
+
+ private:
+  struct Staged {
+    std::string option, path;  // as given
+    fs::path target, temporary;
+    bool committed;
+  };
+  const Staged& find(const std::string& option) const {
+    for (const Staged& file : files_)
+      if (file.option == option) return file;
+    throw std::logic_error("OutputFiles: " + option + " was not claimed");
+  }
+  std::vector<Staged> files_;
+};
+
+// `text` as a JSON string literal.
+std::string json_string(const std::string& text) {
+  std::string quoted = "\"";
+  for (const char c : text) {
+    if (c == '"' || c == '\\') {
+      quoted += '\\';
+      quoted += c;
+    } else if (static_cast<unsigned char>(c) < 0x20) {
+      char escaped[8];
+      std::snprintf(escaped, sizeof escaped, "\\u%04x", c);
+      quoted += escaped;
+    } else {
+      quoted += c;
+    }
+  }
+  return quoted + "\"";
+}
+
+// The CoC map as an image: in a float format (OpenEXR) the signed diameter in pixels itself,
+// one channel; otherwise the false-colour picture.
+Image coc_output_image(const std::string& path, ConstPlane coc) {
+  std::string extension = fs::path(path).extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return char(std::tolower(c)); });
+  if (extension != ".exr") return coc_picture(coc);
+  Image values(coc.width(), coc.height(), 1);
+  for (std::ptrdiff_t y = 0; y < coc.height(); ++y)
+    std::copy(coc.row(y), coc.row(y) + coc.width(), values.plane(0).row(y));
+  return values;
 }
 
 std::string default_coc_path(const std::string& output) {
@@ -107,6 +217,13 @@ int run_dof(const cli::Arguments& args) {
   };
   const int threads = args.integer("threads", 0);
   const DofMethod& method = find_dof_method(args.text("method", "adi"));  // fail before work
+  const std::string output = args.text("output", "tridiff_dof.png");
+  const std::string coc_output = args.text("coc-output", default_coc_path(output));
+  OutputFiles outputs;  // every path checked before the work
+  outputs.claim("--output", output);
+  outputs.claim("--coc-output", coc_output);
+  if (args.has("input-output")) outputs.claim("--input-output", args.text("input-output", ""));
+  if (args.has("report")) outputs.claim("--report", args.text("report", ""), false);
 
   cli::Frame frame = cli::load_frame(args, threads);
   const Image& color = frame.color;
@@ -131,12 +248,11 @@ int run_dof(const cli::Arguments& args) {
   method.run(result, color, coc.plane(0), settings, report);
   const double method_seconds = seconds(method_start);
 
-  const std::string output = args.text("output", "tridiff_dof.png");
-  const std::string coc_output = args.text("coc-output", default_coc_path(output));
   const auto write_start = std::chrono::steady_clock::now();
-  write_image(output, result);
-  write_image(coc_output, coc_picture(coc.plane(0)), ColorEncoding::Linear);
-  if (args.has("input-output")) write_image(args.text("input-output", ""), color);
+  outputs.write_image("--output", result);
+  outputs.write_image("--coc-output", coc_output_image(coc_output, coc.plane(0)),
+                      ColorEncoding::Linear);
+  if (args.has("input-output")) outputs.write_image("--input-output", color);
   const double write_seconds = seconds(write_start);
 
   std::ostringstream text, json;
@@ -152,19 +268,22 @@ int run_dof(const cli::Arguments& args) {
   text << "write " << write_seconds * 1e3 << " ms, total " << seconds(start) * 1e3 << " ms\n"
        << "  wrote    " << output << ", " << coc_output << "\n";
   if (!report.notes.empty()) text << "  notes    " << report.notes << "\n";
-  std::fputs(text.str().c_str(), stdout);
 
   if (args.has("report")) {
-    json << "{\n  \"source\": \"" << source << "\",\n  \"method\": \"" << method.name
-         << "\",\n  \"chosen_method\": \"" << report.chosen_method
-         << "\",\n  \"layered\": " << (report.layered ? "true" : "false")
-         << ",\n  \"coc_model\": \"" << frame.coc_model << "\",\n  \"skipped_fraction\": "
+    json << "{\n  \"source\": " << json_string(source)
+         << ",\n  \"method\": " << json_string(std::string(method.name))
+         << ",\n  \"chosen_method\": " << json_string(report.chosen_method)
+         << ",\n  \"layered\": " << (report.layered ? "true" : "false")
+         << ",\n  \"coc_model\": " << json_string(frame.coc_model) << ",\n  \"skipped_fraction\": "
          << report.skipped_fraction << ",\n  \"explicit_steps\": " << report.explicit_steps
          << ",\n  \"seconds\": {\"input\": " << load_seconds << ", \"coc\": " << coc_seconds;
-    for (const DofStage& stage : report.stages) json << ", \"" << stage.name << "\": " << stage.seconds;
+    for (const DofStage& stage : report.stages)
+      json << ", " << json_string(stage.name) << ": " << stage.seconds;
     json << ", \"method\": " << method_seconds << ", \"write\": " << write_seconds << "}\n}\n";
-    write_text_atomically(args.text("report", ""), json.str());
+    outputs.write_text("--report", json.str());
   }
+  outputs.commit();
+  std::fputs(text.str().c_str(), stdout);
   return 0;
 }
 
