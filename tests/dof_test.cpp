@@ -533,6 +533,50 @@ TEST(DofMethods, DofNoNewExtrema) {
   }
 }
 
+// The edge sizes (1 x 1, one row, one column, 2^k +- 1 across the 64-px tile) with and
+// without layers: every output finite and within the input's range (maximum principle); without
+// layers the mass of every channel kept (insulated borders).
+TEST(DofMethods, EdgeSizesKeepRangeAndMass) {
+  const std::pair<std::ptrdiff_t, std::ptrdiff_t> sizes[] = {
+      {1, 1}, {2, 1}, {1, 2}, {2, 3}, {3, 3}, {1, 37}, {37, 1}, {63, 65}, {65, 63}, {129, 2}};
+  for (const auto& [width, height] : sizes)
+    for (const DofMethod& method : diffusion_methods())
+      for (const bool layers : {false, true}) {
+        SCOPED_TRACE(std::string(method.name) + " " + std::to_string(width) + " x " +
+                     std::to_string(height) + (layers ? " layers" : ""));
+        Case c;
+        c.color = random_image(width, height, 3, 0.f, 1.f, 11);
+        // Near, sharp and far stripes, and a CoC of 30 px on one-pixel-wide images.
+        c.coc = make_coc(width, height, [](auto x, auto y) {
+          const int band = int((x + 2 * y) % 3);
+          return band == 0 ? -30.f : band == 1 ? 0.f : 12.f;
+        });
+        DofSettings settings;
+        settings.layers = layers;
+        const Result r = run(method, c.color, c.coc, settings);
+        for (int ch = 0; ch < 3; ++ch) {
+          float lo = INFINITY, hi = -INFINITY;
+          for (std::ptrdiff_t y = 0; y < height; ++y)
+            for (std::ptrdiff_t x = 0; x < width; ++x) {
+              lo = std::min(lo, c.color(x, y, ch));
+              hi = std::max(hi, c.color(x, y, ch));
+            }
+          const float slack = 1e-5f * std::max(std::fabs(lo), std::fabs(hi));
+          for (std::ptrdiff_t y = 0; y < height; ++y)
+            for (std::ptrdiff_t x = 0; x < width; ++x) {
+              const float v = r.out(x, y, ch);
+              ASSERT_TRUE(std::isfinite(v)) << "(" << x << ", " << y << ")";
+              ASSERT_GE(v, lo - slack) << "(" << x << ", " << y << ")";
+              ASSERT_LE(v, hi + slack) << "(" << x << ", " << y << ")";
+            }
+          if (!layers) {
+            const double before = channel_sum(c.color, ch), after = channel_sum(r.out, ch);
+            EXPECT_NEAR(after, before, 1e-5 * before) << "channel " << ch;
+          }
+        }
+      }
+}
+
 // Per-axis variance (and covariance) of a one-channel response about its centroid.
 struct Moments {
   double mass = 0, var_x = 0, var_y = 0, cov_xy = 0;
