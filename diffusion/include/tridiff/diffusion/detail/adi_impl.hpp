@@ -145,13 +145,21 @@ void for_each_band(std::ptrdiff_t bands, int threads, Body&& body) {
 // the pixels they solve; this is the check of the ones they skip).
 inline void copy_finite(float* dst, const float* src, std::ptrdiff_t n, std::ptrdiff_t x0,
                         std::ptrdiff_t y) {
-  float probe = 0;  // sum of 0 * value: zero unless a value is NaN or infinite
-#pragma omp simd reduction(+ : probe)
-  for (std::ptrdiff_t i = 0; i < n; ++i) {
-    dst[i] = src[i];
-    probe += 0.f * src[i];
-  }
-  if (probe == 0) return;
+  // The copy first (memmove), then the check of the copy while it is in L1, in 64 independent
+  // sums (one sum would wait on its own additions): the ADI DOF at 2048^2 entirely in focus,
+  // into a separate image, 2 threads, 3 alternating runs: 3.4-3.9 ms with the check in the
+  // copy loop, 3.1-3.3 ms so.
+  std::copy(src, src + n, dst);
+  constexpr int kSums = 64;
+  float probe[kSums] = {};  // sums of 0 * value: zero unless a value is NaN or infinite
+  std::ptrdiff_t i = 0;
+  for (; i + kSums <= n; i += kSums)
+#pragma omp simd
+    for (int j = 0; j < kSums; ++j) probe[j] += 0.f * dst[i + j];
+  for (; i < n; ++i) probe[0] += 0.f * dst[i];
+  float any = 0;
+  for (int j = 0; j < kSums; ++j) any += probe[j];
+  if (any == 0) return;
   for (std::ptrdiff_t i = 0; i < n; ++i)
     if (!std::isfinite(src[i])) throw_not_finite(x0 + i, y);
 }
