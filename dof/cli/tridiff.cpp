@@ -121,9 +121,11 @@ class OutputFiles {
     // The extension stays last: OpenImageIO picks the format from it.
     const fs::path temporary = folder / ("." + target.stem().string() + ".partial-" +
                                          std::to_string(getpid()) + target.extension().string());
-    files_.push_back({option, path, target, temporary, false});
-    if (!std::ofstream(temporary))  // proves the folder writable now, not after the work
+    // Writable now, not found out after the work (and nothing created that an interrupted
+    // run would leave behind).
+    if (access(folder.c_str(), W_OK) != 0)
       throw InvalidArgument(option, -1, -1, "'" + path + "': cannot write in " + folder.string());
+    files_.push_back({option, path, target, temporary, false});
   }
 
   void write_image(const std::string& option, const Image& image,
