@@ -20,6 +20,10 @@
 #include <tuple>
 #include <vector>
 
+#if defined(__SSE__)
+#include <xmmintrin.h>
+#endif
+
 #include "tridiff/diffusion/adi.hpp"
 #include "tridiff/diffusion/explicit.hpp"
 #include "tridiff/diffusion/links.hpp"
@@ -749,6 +753,58 @@ TEST(Diffusion, DiffuseExplicitSubstepsLargeBetaWithoutBlowingUp) {
           std::to_string((after - before) / kEps) + " eps over " + std::to_string(steps) +
               " steps");
     }
+}
+
+// A value spreading into zeros decays geometrically (about 0.915 a pixel at beta 128) and
+// would fall below the smallest normal float some 1000 pixels out, where every operation on it
+// takes a slow microcode assist. The solves flush such values to zero: no output is subnormal,
+// the mass lost is below 1e-36, and the caller's floating-point modes are as they were, on one
+// thread (the solve runs in the calling thread) and on two.
+TEST(Diffusion, SubnormalsFlushedToZeroAndCallersStateKept) {
+  const Size size{3000, 1};
+  for (const int threads : {1, 2}) {
+    SCOPED_TRACE("threads " + std::to_string(threads));
+    Image src(size.width, size.height, 1);
+    src(0, 0, 0) = 1.f;
+    const LinkField beta = uniform_links(size, 128.f);
+    Image dst;
+    DiffusionOptions options;
+    options.threads = threads;
+#if defined(__SSE__)
+    // The control bits (rounding, flush modes, masks); bits 0-5 are sticky exception flags
+    // that any inexact operation sets.
+    const auto control = [] { return _mm_getcsr() & ~0x3fu; };
+    const unsigned before = control();
+#endif
+    diffuse_adi(dst, src, beta, options);
+#if defined(__SSE__)
+    EXPECT_EQ(control(), before);
+#endif
+    double mass = 0;
+    std::ptrdiff_t zeros = 0;
+    for (std::ptrdiff_t x = 0; x < size.width; ++x) {
+      const float v = dst(x, 0, 0);
+      EXPECT_NE(std::fpclassify(v), FP_SUBNORMAL) << "x = " << x << ": " << v;
+      mass += v;
+      zeros += v == 0.f;
+    }
+    EXPECT_GT(zeros, 1000);  // the decay did reach the subnormal range
+    EXPECT_NEAR(mass, 1.0, 1e-6);
+
+    // The explicit scheme: 512 steps whose front, kappa^k at k pixels, falls below 1e-38.
+    Image explicit_dst;
+    diffuse_explicit(explicit_dst, src, beta, options);
+#if defined(__SSE__)
+    EXPECT_EQ(control(), before);
+#endif
+    double explicit_mass = 0;
+    for (std::ptrdiff_t x = 0; x < size.width; ++x) {
+      const float v = explicit_dst(x, 0, 0);
+      EXPECT_NE(std::fpclassify(v), FP_SUBNORMAL) << "explicit, x = " << x << ": " << v;
+      explicit_mass += v;
+    }
+    EXPECT_NEAR(explicit_mass, 1.0, 1e-5);
+  }
 }
 
 // The sub-step count has a ceiling (DiffusionOptions::max_explicit_steps): a field that needs

@@ -9,6 +9,7 @@
 #include <string>
 #include <utility>
 
+#include "tridiff/solvers/detail/subnormals.hpp"
 #include "tridiff/solvers/solve.hpp"
 
 namespace tridiff {
@@ -95,13 +96,17 @@ std::ptrdiff_t run_steps(Plane dst, ConstPlane src, const LinkField& kappa, int 
         moving_pixels += (std::min(width, (tx + 1) * kTile) - tx * kTile) *
                          (std::min(height, (ty + 1) * kTile) - ty * kTile);
   for (int step = 0; step < steps; ++step) {
-#pragma omp parallel for num_threads(threads) schedule(static)
-    for (std::ptrdiff_t y = 0; y < height; ++y) {
-      const std::ptrdiff_t ty = y / kTile;
-      for (std::ptrdiff_t tx = 0; tx < tiles_x; ++tx) {
-        if (skip && !tile_moves(kappa, tx, ty)) continue;
-        step_row(ping, pong, kappa.horizontal(), kappa.vertical(), y, tx * kTile,
-                 std::min(width, (tx + 1) * kTile));
+#pragma omp parallel num_threads(threads)
+    {
+      const detail::SubnormalsAsZero flush;  // see subnormals.hpp
+#pragma omp for schedule(static)
+      for (std::ptrdiff_t y = 0; y < height; ++y) {
+        const std::ptrdiff_t ty = y / kTile;
+        for (std::ptrdiff_t tx = 0; tx < tiles_x; ++tx) {
+          if (skip && !tile_moves(kappa, tx, ty)) continue;
+          step_row(ping, pong, kappa.horizontal(), kappa.vertical(), y, tx * kTile,
+                   std::min(width, (tx + 1) * kTile));
+        }
       }
     }
     std::swap(ping, pong);

@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "tridiff/solvers/detail/subnormals.hpp"
 #include "tridiff/solvers/solve.hpp"
 
 namespace tridiff::adi_detail {
@@ -119,6 +120,7 @@ void for_each_band(std::ptrdiff_t bands, int threads, Body&& body) {
 #pragma omp parallel num_threads(threads) if (threads > 1 && bands > 1)
   {
     static thread_local BandScratch scratch;
+    const detail::SubnormalsAsZero flush;  // see subnormals.hpp
 #pragma omp for schedule(dynamic, 1)
     for (std::ptrdiff_t band = 0; band < bands; ++band) {
       try {
