@@ -42,10 +42,13 @@ inline float filled(bool known, float known_value, float sum, float weight) {
   return weight > 1e-30f ? sum / weight : known_value;
 }
 
+// A pixel of the near field: in front of the focus and blurred (negative CoC).
+inline bool in_near_field(float coc_px, float in_focus_px) { return coc_px <= -in_focus_px; }
+
 bool has_near_blur(ConstPlane coc, float in_focus_px) {
   for (std::ptrdiff_t y = 0; y < coc.height(); ++y)
     for (std::ptrdiff_t x = 0; x < coc.width(); ++x)
-      if (coc(x, y) <= -in_focus_px) return true;
+      if (in_near_field(coc(x, y), in_focus_px)) return true;
   return false;
 }
 
@@ -84,7 +87,7 @@ void layered_dof(Image& out, const Image& color, ConstPlane coc, const DofSettin
       float* kept_coc = background_coc.plane(0).row(y);
       float* keep = background_coc.plane(1).row(y);
       for (std::ptrdiff_t x = 0; x < width; ++x) {
-        keep[x] = k[x] <= -in_focus ? 0.f : 1.f;
+        keep[x] = in_near_field(k[x], in_focus) ? 0.f : 1.f;
         kept_coc[x] = keep[x] * std::abs(k[x]);
       }
       for (int c = 0; c < channels; ++c) {
@@ -103,10 +106,11 @@ void layered_dof(Image& out, const Image& color, ConstPlane coc, const DofSettin
         const float* original = color.plane(c).row(y);
         float* value = background.plane(c).row(y);
         for (std::ptrdiff_t x = 0; x < width; ++x)
-          value[x] = filled(k[x] > -in_focus, original[x], value[x], weight[x]);
+          value[x] = filled(!in_near_field(k[x], in_focus), original[x], value[x], weight[x]);
       }
       for (std::ptrdiff_t x = 0; x < width; ++x)
-        filled_coc[x] = filled(k[x] > -in_focus, std::abs(k[x]), filled_coc[x], weight[x]);
+        filled_coc[x] =
+            filled(!in_near_field(k[x], in_focus), std::abs(k[x]), filled_coc[x], weight[x]);
     });
   });
   timed(report, "background blur", [&] {
@@ -124,7 +128,7 @@ void layered_dof(Image& out, const Image& color, ConstPlane coc, const DofSettin
       float* inside = near_layer.plane(channels).row(y);
       float* sum = near_coc.plane(0).row(y);
       for (std::ptrdiff_t x = 0; x < width; ++x) {
-        inside[x] = k[x] <= -in_focus ? 1.f : 0.f;
+        inside[x] = in_near_field(k[x], in_focus) ? 1.f : 0.f;
         sum[x] = inside[x] * std::abs(k[x]);
       }
       std::copy(inside, inside + width, near_coc.plane(1).row(y));
@@ -140,7 +144,7 @@ void layered_dof(Image& out, const Image& color, ConstPlane coc, const DofSettin
       float* value = near_coc.plane(0).row(y);
       const float* weight = near_coc.plane(1).row(y);
       for (std::ptrdiff_t x = 0; x < width; ++x)
-        value[x] = filled(k[x] <= -in_focus, std::abs(k[x]), value[x], weight[x]);
+        value[x] = filled(in_near_field(k[x], in_focus), std::abs(k[x]), value[x], weight[x]);
     });
     diffusion += diffuse(near_layer, near_layer, near_coc.plane(0), in_focus, options);
   });
@@ -164,6 +168,21 @@ void layered_dof(Image& out, const Image& color, ConstPlane coc, const DofSettin
   report.skipped_fraction = diffusion.skipped_fraction();
 }
 
+// The diffusers name a conductance they refuse by their own argument: "value" (a per-pixel
+// conductance that is not finite), "beta" (a link field the explicit scheme cannot step). The
+// conductances come from the CoC, so the error is named as the CoC's, as every method names it.
+template <class Work>
+void naming_the_coc(const Image& color, ConstPlane coc, Work&& work) {
+  try {
+    work();
+  } catch (const InvalidArgument& error) {
+    if (error.argument() != "value" && error.argument() != "beta") throw;
+    validate_coc(color, coc);  // names a CoC pixel that is not finite
+    // A finite CoC whose conductance is not (|CoC| above about 1e19 px) or is too large.
+    throw InvalidArgument("coc", error.system(), error.row(), error.message());
+  }
+}
+
 }  // namespace
 
 LinkField coc_links(ConstPlane coc, float in_focus_px, int threads) {
@@ -178,22 +197,19 @@ void diffusion_dof(Image& out, const Image& color, ConstPlane coc, const DofSett
   options.progress = settings.progress;
   if (settings.layers && has_near_blur(coc, settings.in_focus_coc_px)) {
     validate_dof_input(color, coc);
-    return layered_dof(out, color, coc, settings, report, diffuse, options);
+    naming_the_coc(color, coc,
+                   [&] { layered_dof(out, color, coc, settings, report, diffuse, options); });
+    return;
   }
   // The colour is checked by the diffuser where it passes (see Diffuser), and so is the CoC:
   // a CoC that is not finite has no finite conductance, which the diffuser refuses before it
-  // writes anything. Its error names the diffuser's argument ("value"); it is named here as
-  // the CoC's, as every method names it.
+  // writes anything.
   validate_coc_size(color, coc);
-  const DiffusionReport diffusion = timed(report, "diffusion", [&] {
-    try {
-      return diffuse(out, color, coc, settings.in_focus_coc_px, options);
-    } catch (const InvalidArgument& error) {
-      if (error.argument() != "value") throw;
-      validate_coc(color, coc);  // names a CoC pixel that is not finite
-      // A finite CoC whose conductance is not (|CoC| above about 1e19 px).
-      throw InvalidArgument("coc", error.system(), error.row(), error.message());
-    }
+  DiffusionReport diffusion;
+  timed(report, "diffusion", [&] {
+    naming_the_coc(color, coc, [&] {
+      diffusion = diffuse(out, color, coc, settings.in_focus_coc_px, options);
+    });
   });
   report.skipped_fraction = diffusion.skipped_fraction();
 }

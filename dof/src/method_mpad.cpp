@@ -15,15 +15,7 @@ void run_mpad(Image& out, const Image& color, ConstPlane coc, const DofSettings&
                          const DiffusionOptions& options) {
                   const LinkField beta = coc_links(coc, in_focus_px, options.threads);
                   int taken = 0;
-                  DiffusionReport r;
-                  try {
-                    r = diffuse_explicit(dst, src, beta, options, &taken);
-                  } catch (const InvalidArgument& error) {
-                    if (error.argument() != "beta") throw;
-                    // The conductances come from the CoC: name what the caller gave.
-                    throw InvalidArgument("coc", -1, -1,
-                                          "too large for explicit diffusion: " + error.message());
-                  }
+                  DiffusionReport r = diffuse_explicit(dst, src, beta, options, &taken);
                   steps = std::max(steps, taken);
                   return r;
                 });

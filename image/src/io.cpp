@@ -114,11 +114,16 @@ std::vector<float> read_interleaved(OIIO::ImageInput& input, const std::string& 
   return pixels;
 }
 
+// "pixel (x, y) of channel 'C'", as every error about one value of a file begins.
+std::string pixel_of_channel(std::ptrdiff_t x, std::ptrdiff_t y, const std::string& channel) {
+  return "pixel (" + std::to_string(x) + ", " + std::to_string(y) + ") of channel " +
+         quote(channel);
+}
+
 [[noreturn]] void fail_not_finite(const std::string& path, const std::string& channel,
                                   std::ptrdiff_t x, std::ptrdiff_t y, float value) {
-  fail(path, "pixel (" + std::to_string(x) + ", " + std::to_string(y) + ") of channel " +
-                 quote(channel) + " is " + (std::isnan(value) ? "NaN" : "infinite") +
-                 "; colour must be finite");
+  fail(path, pixel_of_channel(x, y, channel) + " is " +
+                 (std::isnan(value) ? "NaN" : "infinite") + "; colour must be finite");
 }
 
 // Where the first NaN or infinity of `plane` is, by rows, if it has one.
@@ -315,8 +320,7 @@ bool usable_depth(float value, float distance, DepthConvention convention) {
 [[noreturn]] void fail_depth(const std::string& path, const std::string& channel, std::ptrdiff_t x,
                              std::ptrdiff_t y, float value, float distance,
                              DepthConvention convention) {
-  const std::string pixel = "pixel (" + std::to_string(x) + ", " + std::to_string(y) +
-                            ") of channel " + quote(channel) + " is ";
+  const std::string pixel = pixel_of_channel(x, y, channel) + " is ";
   // Name the stored value when it is itself the problem, else what the conversion made of it.
   if (convention == DepthConvention::Linear || std::isnan(value) || std::isinf(value))
     fail(path, pixel + describe_bad(value) + "; depth must be finite and > 0");
@@ -510,8 +514,7 @@ ColorImage read_color(const std::string& path, ColorEncoding encoding) {
     if (spec.format.is_floating_point())
       for (int c = 0; c < 3; ++c)
         if (const auto at = first_not_finite(image.plane(c)))
-          fail(path, "pixel (" + std::to_string(at->first) + ", " + std::to_string(at->second) +
-                         ") of channel " + quote(spec.channelnames[chosen.rgb[c]]) +
+          fail(path, pixel_of_channel(at->first, at->second, spec.channelnames[chosen.rgb[c]]) +
                          " is too large for the sRGB curve (it decodes to infinity)");
   }
   return {std::move(image), held};
