@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Tests of the `tridiff` command line, run by CTest:
 #   cli_test.sh TRIDIFF_BINARY WORK_DIR CASE
-# CASE is one of: help, dof, roundtrip, errors, outputs, ipf. Every check prints what it ran
+# CASE is one of: help, dof, roundtrip, errors, outputs, hostile, ipf (and options). Every check prints what it ran
 # and what it saw when it fails; the script exits non-zero if any check failed.
 set -u
 
@@ -309,6 +309,154 @@ outputs)
   fi
   ;;
 
+hostile)
+  # Outputs never replace a special file, an input or a redirected standard stream; a full
+  # disk is an error naming the file; huge or damaged inputs are refused before the work;
+  # nothing is left behind, no temporary file either.
+  need_oiiotool
+  d=$work/h
+  mkdir -p "$d"
+  small=(--width 32 --height 18)
+
+  run dof "${small[@]}" -o "$d/x.png" --report /dev/null
+  expect_status nonzero "--report /dev/null"
+  expect_in "$err" "--report '/dev/null': is a character device" "--report /dev/null"
+  [[ -c /dev/null ]] || fail "/dev/null is no longer a character device"
+  expect_only_files "$d"
+
+  mkfifo "$d/fifo.png"
+  out=$(timeout 60 "$tridiff" dof "${small[@]}" -o "$d/fifo.png" 2>"$work/stderr.txt")
+  status=$?
+  err=$(cat "$work/stderr.txt")
+  expect_status nonzero "-o naming a FIFO (no reader: must not hang)"
+  expect_in "$err" "FIFO" "-o naming a FIFO"
+  [[ -p $d/fifo.png ]] || fail "the FIFO was replaced"
+  rm -f "$d/fifo.png"
+
+  # `--report /dev/stdout > file`: renaming over that file would cut the redirection off.
+  "$tridiff" dof "${small[@]}" -o "$d/x.png" --report /dev/stdout >"$work/redirected.txt" \
+    2>"$work/stderr.txt"
+  status=$?
+  err=$(cat "$work/stderr.txt")
+  expect_status nonzero "--report /dev/stdout redirected to a file"
+  expect_in "$err" "standard output" "--report /dev/stdout redirected to a file"
+  expect_only_files "$d"
+
+  # An output may not replace an input, under any spelling.
+  oiiotool --pattern constant:color=0.3,0.5,0.7 32x18 3 -d half -o "$d/color.exr" || fail "oiiotool"
+  oiiotool --pattern constant:color=2.0 32x18 1 -d float -o "$d/depth.exr" || fail "oiiotool"
+  ln "$d/depth.exr" "$d/depth_link.exr"
+  cp "$d/color.exr" "$work/color_before.exr"
+  run dof --color "$d/color.exr" --depth "$d/depth.exr" -o "$d/color.exr"
+  expect_status nonzero "-o equal to --color"
+  expect_in "$err" "is the --color file" "-o equal to --color"
+  run dof --color "$d/color.exr" --depth "$d/depth.exr" -o "$d/x.png" --coc-output "$d/depth_link.exr"
+  expect_status nonzero "--coc-output a hard link of --depth"
+  expect_in "$err" "is the --depth file" "--coc-output a hard link of --depth"
+  run ipf --color "$d/color.exr" --depth "$d/depth.exr" --mask 3 -o "$d/./color.exr"
+  expect_status nonzero "ipf -o equal to --color"
+  expect_in "$err" "is the --color file" "ipf -o equal to --color"
+  cmp -s "$d/color.exr" "$work/color_before.exr" || fail "the --color file was changed"
+  expect_only_files "$d" color.exr depth.exr depth_link.exr
+  rm -f "$d"/*
+
+  # A failed write, as a full disk fails it: here the file-size limit (no privileges needed).
+  for output in big.png big.jpg big.exr big.tif; do
+    (ulimit -f 4 && exec "$tridiff" dof --width 160 --height 90 -o "$d/$output") \
+      >/dev/null 2>"$work/stderr.txt"
+    status=$?
+    err=$(cat "$work/stderr.txt")
+    expect_status nonzero "$output past the file-size limit"
+    expect_in "$err" "--output '$d/$output': cannot write (File too large)" "$output past the limit"
+    expect_only_files "$d"
+  done
+  (ulimit -f 4 && exec "$tridiff" ipf --width 160 --height 90 --mask 3 -o "$d/ipf.png") \
+    >/dev/null 2>"$work/stderr.txt"
+  status=$?
+  err=$(cat "$work/stderr.txt")
+  expect_status nonzero "ipf past the file-size limit"
+  expect_in "$err" "cannot write (File too large)" "ipf past the file-size limit"
+  expect_only_files "$d"
+  # A disk really full, where this runs as root and may mount a small tmpfs.
+  mkdir -p "$work/full"
+  if [[ $(id -u) == 0 ]] && mount -t tmpfs -o size=12k tmpfs "$work/full" 2>/dev/null; then
+    for output in full.png full.jpg; do
+      run dof --width 160 --height 90 -o "$work/full/$output" --coc-output "$work/full/c.png"
+      expect_status nonzero "$output on a full disk"
+      expect_in "$err" "cannot write (No space left on device)" "$output on a full disk"
+      expect_only_files "$work/full"
+    done
+    umount "$work/full"
+  else
+    echo "note: cannot mount a tmpfs here; a full disk is tested through the file-size limit"
+  fi
+
+  # The longest legal name works; one byte more is refused before the work.
+  long=$(printf 'n%.0s' {1..251})
+  run dof "${small[@]}" -o "$d/$long.png" --coc-output "$d/c.png"
+  expect_status 0 "an output name of 255 bytes"
+  expect_only_files "$d" "$long.png" c.png
+  run dof "${small[@]}" -o "$d/x.png" --coc-output none
+  expect_status 0 "--coc-output none"
+  expect_only_files "$d" "$long.png" c.png x.png
+  run dof "${small[@]}" -o "$d/n$long.png"
+  expect_status nonzero "an output name of 256 bytes"
+  expect_in "$err" "the name is too long" "an output name of 256 bytes"
+  rm -f "$d"/*
+
+  # A 20000 x 20000 PNG in a few dozen bytes: refused from its header, at once.
+  if command -v python3 >/dev/null; then
+    python3 - "$d/huge.png" <<'PY'
+import struct, sys, zlib
+def chunk(kind, data):
+    return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+header = struct.pack(">IIBBBBB", 20000, 20000, 8, 2, 0, 0, 0)
+open(sys.argv[1], "wb").write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) +
+                              chunk(b"IDAT", zlib.compress(b"\0" * 64)) + chunk(b"IEND", b""))
+PY
+    run dof --color "$d/huge.png" --depth "$d/huge.png" -o "$d/x.png"
+    expect_status nonzero "a PNG declaring 20000 x 20000"
+    expect_in "$err" "huge.png: is 20000 x 20000 = 400000000 pixels, more than the limit" \
+      "a PNG declaring 20000 x 20000"
+    expect_in "$err" "--max-pixels" "a PNG declaring 20000 x 20000"
+  fi
+  oiiotool --pattern constant:color=0.3,0.5,0.7 32x18 3 -d half -o "$d/color.exr" || fail "oiiotool"
+  oiiotool --pattern constant:color=2.0 32x18 1 -d float -o "$d/depth.exr" || fail "oiiotool"
+  run dof --color "$d/color.exr" --depth "$d/depth.exr" --max-pixels 575 -o "$d/x.png"
+  expect_status nonzero "--max-pixels below the image"
+  expect_in "$err" "is 32 x 18 = 576 pixels, more than the limit of 575" "--max-pixels 575"
+  run dof --color "$d/color.exr" --depth "$d/depth.exr" --max-pixels 0 -o "$d/x.png"
+  expect_status nonzero "--max-pixels 0"
+  expect_in "$err" "--max-pixels" "--max-pixels 0"
+
+  # A truncated TIFF: its reader says success with strips missing; tridiff refuses it.
+  oiiotool --pattern noise 160x90 3 -d uint8 -o "$d/whole.tif" || fail "oiiotool"
+  head -c "$(($(stat -c %s "$d/whole.tif") / 2))" "$d/whole.tif" >"$d/cut.tif"
+  run dof --color "$d/cut.tif" --depth "$d/depth.exr" -o "$d/x.png"
+  expect_status nonzero "a truncated TIFF"
+  expect_in "$err" "cut.tif: cannot read the pixels" "a truncated TIFF"
+  # A truncated PNG: one message of tridiff's, without libpng's own line before it.
+  oiiotool --pattern noise 160x90 3 -d uint8 -o "$d/whole.png" || fail "oiiotool"
+  head -c "$(($(stat -c %s "$d/whole.png") / 2))" "$d/whole.png" >"$d/cut.png"
+  run dof --color "$d/cut.png" --depth "$d/depth.exr" -o "$d/x.png"
+  expect_status nonzero "a truncated PNG"
+  expect_in "$err" "cut.png: cannot read the pixels" "a truncated PNG"
+  [[ $err != *"libpng error"* ]] || fail "libpng's own message reached stderr: $err"
+  expect_only_files "$d" huge.png color.exr depth.exr whole.tif cut.tif whole.png cut.png
+
+  # Nothing after `methods` or `--help`; a bare `tridiff` is an error: usage on stderr only.
+  for words in "methods extra" "--help extra"; do
+    # shellcheck disable=SC2086
+    run $words
+    expect_status nonzero "tridiff $words"
+    expect_in "$err" "extra" "tridiff $words"
+  done
+  run
+  expect_status nonzero "a bare tridiff"
+  expect_in "$err" "usage" "a bare tridiff"
+  [[ -z $out ]] || fail "a bare tridiff printed on stdout: $out"
+  ;;
+
 ipf)
   # The Inverse Post Filter model on the built-in scene at 160 x 90, mask 17, four parts:
   # lines of 160/4 + 16 = 56 stages; each part (90 + 16) x 56 + 16 = 5952 clocks, 23 808 in all;
@@ -350,6 +498,106 @@ ipf)
     expect_in "$err" "${bad%% *}" "ipf $bad names the option"
   done
   expect_only_files "$d" ipf.png lap.png
+  ;;
+
+options)
+  # Hostile and contradictory options (issue 21): each is refused before any work, with a
+  # message naming the option(s), and nothing is written in the working folder (where the
+  # default outputs tridiff_dof.png and tridiff_ipf.png would go).
+  d=$work/opt
+  mkdir -p "$d"
+  tridiff=$(realpath "$tridiff")
+  work=$(realpath "$work")
+  cd "$d" || exit 1
+  small=(--width 64 --height 48)
+  # refused DESCRIPTION NEEDLE... -- ARGS...: a non-zero exit, every NEEDLE on stderr, no file.
+  refused() {
+    local description=$1 needle
+    local needles=()
+    shift
+    while [[ $1 != -- ]]; do
+      needles+=("$1")
+      shift
+    done
+    shift
+    run "$@"
+    expect_status nonzero "$description"
+    for needle in "${needles[@]}"; do expect_in "$err" "$needle" "$description"; done
+    expect_only_files "$d"
+  }
+
+  # The thread count: beyond the library's bound (1024) the OpenMP runtime crashed.
+  refused "dof --threads 100000" "--threads" "at most 1024" -- dof "${small[@]}" --threads 100000
+  refused "ipf --threads 1025" "--threads" "at most 1024" -- ipf "${small[@]}" --threads 1025
+  refused "dof --threads -1" "--threads" -- dof "${small[@]}" --threads -1
+
+  # The ipf model's bounds, before the frame is rendered.
+  refused "ipf --mask 1000001" "--mask" "511" -- ipf "${small[@]}" --mask 1000001
+  refused "ipf --mask 513" "--mask" "511" -- ipf "${small[@]}" --mask 513
+  refused "ipf 1920 x 1080 at mask 255" "--mask" "4e+10" -- ipf --mask 255
+  refused "ipf --parts 2000" "--parts" "1024" -- ipf "${small[@]}" --parts 2000
+  refused "ipf --register-size 100000" "--register-size" "65536" -- \
+    ipf "${small[@]}" --register-size 100000
+  refused "ipf --pixels-per-clock 1e6" "--pixels-per-clock" "1024" -- \
+    ipf "${small[@]}" --pixels-per-clock 1e6
+  refused "ipf --cycles-per-pixel 2000" "--cycles-per-pixel" "1024" -- \
+    ipf "${small[@]}" --cycles-per-pixel 2000
+  refused "ipf --clock-mhz 1e9" "--clock-mhz" -- ipf "${small[@]}" --clock-mhz 1e9
+  refused "ipf --bandwidth-gbs 1e9" "--bandwidth-gbs" -- ipf "${small[@]}" --bandwidth-gbs 1e9
+  refused "ipf laplacian --rule" "--rule" "--program dof" -- \
+    ipf "${small[@]}" --program laplacian --rule printed
+  # The plan's own refusal, named as the option.
+  refused "ipf --parts 100 on 64 px" "--parts" -- ipf "${small[@]}" --parts 100
+
+  # An option given twice (the last used to win), a flag too, -o and --output alike.
+  refused "--width twice" "--width" "twice" -- dof "${small[@]}" --width 32
+  refused "--layers twice" "--layers" "twice" -- dof "${small[@]}" --layers --layers
+  refused "-o and --output" "--output" "twice" -- dof "${small[@]}" -o a.png --output b.png
+  refused "ipf --mask twice" "--mask" "twice" -- ipf "${small[@]}" --mask 3 --mask 5
+
+  # The built-in scene's size with files: the files have their own.
+  if command -v oiiotool >/dev/null; then
+    oiiotool --pattern constant:color=0.3,0.5,0.7 64x48 3 -d half -o "$work/color.exr" &&
+      oiiotool --pattern constant:color=2.0 64x48 1 -d float -o "$work/depth.exr" ||
+      fail "oiiotool"
+    refused "--width with --color" "--width" "--color" -- \
+      dof --color "$work/color.exr" --depth "$work/depth.exr" --width 64
+    refused "--height with --color" "--height" "--color" -- \
+      ipf --color "$work/color.exr" --depth "$work/depth.exr" --height 48
+  fi
+
+  # Lens options with the artist curve, which replaces the lens: both named.
+  for lens in "--focus 3" "--f-number 2" "--focal-length 35" "--sensor-width 24" "--max-coc 8"; do
+    # shellcheck disable=SC2086
+    refused "$lens with the artist curve" "${lens%% *}" "--near-start" -- \
+      dof "${small[@]}" --near-start 0.5 --near-end 2 --near-radius 4 $lens
+  done
+
+  # An empty or reversed range with a radius used to turn that blur off silently.
+  refused "reversed near range" "--near-end" "--near-start" -- \
+    dof "${small[@]}" --near-start 2 --near-end 1 --near-radius 4
+  refused "near radius without a range" "--near-end" "--near-radius" -- \
+    dof "${small[@]}" --near-radius 4
+  refused "empty far range" "--far-end" "--far-start" -- \
+    dof "${small[@]}" --far-start 5 --far-end 5 --far-radius 3
+  refused "reversed far range" "--far-end" "--far-start" -- \
+    dof "${small[@]}" --far-start 8 --far-end 5 --far-radius 3
+  refused "overlapping ranges" "--far-start" "--near-end" -- \
+    dof "${small[@]}" --near-start 1 --near-end 3 --near-radius 4 --far-start 2 --far-end 6 \
+    --far-radius 3
+
+  # A CoC map too large for the method is named as the options that made it, not 'coc'.
+  refused "mpad at --max-coc 1e7" "--max-coc" "explicit steps" -- \
+    dof "${small[@]}" --method mpad --max-coc 1e7 --f-number 0.001
+  refused "mpad at --far-radius 1e6" "--far-radius" "explicit steps" -- \
+    dof "${small[@]}" --method mpad --far-start 1 --far-end 1.5 --far-radius 1e6
+  [[ $err != *"'coc'"* ]] || fail "the CoC map's error still names 'coc': $err"
+
+  # The sanity check of this case: the bound itself, and both blur regions, do work.
+  run dof "${small[@]}" --threads 1024 --near-start 0.5 --near-end 2 --near-radius 3 \
+    --far-start 5 --far-end 9 --far-radius 4 -o ok.png
+  expect_status 0 "dof --threads 1024 with both artist-curve regions"
+  expect_only_files "$d" ok.png ok_coc.png
   ;;
 
 *)

@@ -260,6 +260,9 @@ TEST(ArtistCurve, PiecewiseLinearThroughBreakpoints) {
   }
 }
 
+// A degenerate region gives no blur in coc_artist_curve(distance, curve), which does not
+// validate; validate() accepts the one turned off by a zero radius and refuses an empty or
+// reversed range that has a radius (it would silently blur nothing).
 TEST(ArtistCurve, DegenerateNearRegionHasNoNearBlur) {
   for (auto edit : std::vector<std::function<void(ArtistCurve&)>>{
            [](ArtistCurve& c) { c.near_end_m = c.near_start_m; },
@@ -267,7 +270,10 @@ TEST(ArtistCurve, DegenerateNearRegionHasNoNearBlur) {
            [](ArtistCurve& c) { c.near_radius_px = 0.f; }}) {
     ArtistCurve c = example_curve();
     edit(c);
-    ASSERT_NO_THROW(validate(c));
+    if (c.near_radius_px > 0)
+      EXPECT_EQ(invalid_argument_of([&] { validate(c); }).argument, "near_end");
+    else
+      ASSERT_NO_THROW(validate(c));
     for (float d : {0.f, 0.01f, 0.5f, 1.f, 2.f, 3.f, 5.f, 10.f})
       EXPECT_EQ(coc_artist_curve(d, c), 0.f) << d;
     EXPECT_NEAR(coc_artist_curve(15.f, c), 5.f, 1e-5);  // the far field untouched
@@ -281,12 +287,46 @@ TEST(ArtistCurve, DegenerateFarRegionHasNoFarBlur) {
            [](ArtistCurve& c) { c.far_radius_px = 0.f; }}) {
     ArtistCurve c = example_curve();
     edit(c);
-    ASSERT_NO_THROW(validate(c));
+    if (c.far_radius_px > 0)
+      EXPECT_EQ(invalid_argument_of([&] { validate(c); }).argument, "far_end");
+    else
+      ASSERT_NO_THROW(validate(c));
     for (float d : {3.f, 5.f, 10.f, 15.f, 20.f, 1e6f}) EXPECT_EQ(coc_artist_curve(d, c), 0.f) << d;
     EXPECT_NEAR(coc_artist_curve(2.f, c), -8.f, 1e-5);  // the near field untouched
   }
   // Both degenerate: nothing blurs (the default curve).
   for (float d : {0.1f, 1.f, 100.f}) EXPECT_EQ(coc_artist_curve(d, ArtistCurve{}), 0.f);
+  EXPECT_NO_THROW(validate(ArtistCurve{}));
+}
+
+// A region with a radius but an empty or reversed range: refused by validate and by the map,
+// naming the end and saying what it must exceed (a reversed range used to turn the blur off).
+TEST(ArtistCurve, EmptyOrReversedRangeWithARadiusIsRefused) {
+  Image depth = make_image(4, 4, 1, [](auto, auto, int) { return 2.f; }), coc(4, 4, 1);
+  struct Case {
+    void (*edit)(ArtistCurve&);
+    const char* argument;
+    const char* names;
+  };
+  for (const Case& k : {Case{[](ArtistCurve& c) { c.near_end_m = c.near_start_m; }, "near_end",
+                             "near_start"},
+                        Case{[](ArtistCurve& c) { std::swap(c.near_start_m, c.near_end_m); },
+                             "near_end", "near_start"},
+                        Case{[](ArtistCurve& c) { c.near_start_m = c.near_end_m = 0.f; },
+                             "near_end", "near_start"},
+                        Case{[](ArtistCurve& c) { c.far_end_m = c.far_start_m; }, "far_end",
+                             "far_start"},
+                        Case{[](ArtistCurve& c) { std::swap(c.far_start_m, c.far_end_m); },
+                             "far_end", "far_start"}}) {
+    ArtistCurve c = example_curve();
+    k.edit(c);
+    const Thrown thrown = invalid_argument_of([&] { validate(c); });
+    EXPECT_EQ(thrown.argument, k.argument) << thrown.message;
+    EXPECT_TRUE(contains(thrown.message, k.names)) << thrown.message;
+    EXPECT_EQ(
+        invalid_argument_of([&] { coc_artist_curve(coc.plane(0), depth.plane(0), c); }).argument,
+        k.argument);
+  }
 }
 
 TEST(ArtistCurve, ValidateNamesTheBadParameter) {

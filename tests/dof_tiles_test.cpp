@@ -9,6 +9,7 @@
 #include "test_util.hpp"
 #include "tridiff/dof/method.hpp"
 #include "tridiff/dof/tiles.hpp"
+#include "tridiff/solvers/solve.hpp"  // kMaxThreads
 
 namespace tridiff {
 namespace {
@@ -134,6 +135,21 @@ TEST(DofTiles, BadArgumentsAreNamed) {
   Image other(11, 10, 1);
   const TileMap tiles(coc.plane(0), 1.f, 8);
   EXPECT_THROW(copy_unreached_tiles(tiles, coc.plane(0), other.plane(0)), InvalidArgument);
+  // `threads` means what it means everywhere in the library: 0 to kMaxThreads.
+  for (int threads : {-1, kMaxThreads + 1, 1 << 20}) {
+    EXPECT_EQ(testing_util::invalid_argument_of(
+                  [&] { TileMap(coc.plane(0), 1.f, 8, 0, threads); })
+                  .argument,
+              "threads")
+        << threads;
+    Image out(10, 10, 1);
+    EXPECT_EQ(testing_util::invalid_argument_of([&] {
+                copy_unreached_tiles(tiles, coc.plane(0), out.plane(0), threads);
+              }).argument,
+              "threads")
+        << threads;
+  }
+  EXPECT_NO_THROW(TileMap(coc.plane(0), 1.f, 8, 0, kMaxThreads));
 }
 
 }  // namespace

@@ -348,6 +348,23 @@ TEST(IpfModel, CountsMatchTheEstimate) {
       }
 }
 
+// The cost known before a run: a unit step per pixel and mask position, and the registers of
+// the parts that run at once (one per thread), each n x n mask stages and n - 1 pipes.
+TEST(IpfModel, CostBeforeTheRun) {
+  const int mask = 9;
+  const FramePlan plan = plan_frame(40, 30, mask, 4);  // four parts of 10 columns, lines of 18
+  ASSERT_FALSE(plan.columns);
+  const ModelCost one = model_cost(plan, 1);
+  EXPECT_EQ(one.unit_steps, 40.0 * 30 * mask * mask);
+  const double cells = mask * mask + (mask - 1) * (18 - mask);
+  EXPECT_GE(one.register_bytes, cells * double(sizeof(PipeData) + sizeof(Accumulators)));
+  EXPECT_LE(one.register_bytes, cells * 2 * double(sizeof(PipeData) + sizeof(Accumulators)));
+  EXPECT_EQ(model_cost(plan, 2).register_bytes, 2 * one.register_bytes);
+  EXPECT_EQ(model_cost(plan, 8).register_bytes, 4 * one.register_bytes);  // four parts at most
+  EXPECT_EQ(model_cost(plan, 8).unit_steps, one.unit_steps);
+  EXPECT_EQ(invalid_argument_of([&] { model_cost(plan, 100000); }).argument, "threads");
+}
+
 TEST(IpfModel, ExplicitRegisterSizeConfiguresItsSwitches) {
   const Image color = random_colors(40, 30, 3, 4);
   Image out;
@@ -479,7 +496,7 @@ TEST(IpfErrors, NameTheArgument) {
   const Image color = random_colors(20, 10, 3, 1);
   const Image plane = make_image(20, 10, 1, [](auto, auto, int) { return 1.f; });
   Image out;
-  for (int mask : {2, 1, 16}) {
+  for (int mask : {2, 1, 16, kMaxMask + 2, 1000001}) {
     DofProgram program;
     program.mask = mask;
     EXPECT_EQ(invalid_argument_of([&] {
@@ -495,6 +512,17 @@ TEST(IpfErrors, NameTheArgument) {
               run_mask_model(out, color, laplacian_kernel(3), {0, 0, 1});
             }).argument,
             "parts");
+  // The widest mask is fig. 10's 8-bit Radius (255 pixels) across: 511, and no wider.
+  static_assert(kMaxMask == 511);
+  DofProgram widest;
+  widest.mask = kMaxMask;
+  EXPECT_NO_THROW(validate(widest));
+  EXPECT_NO_THROW(validate(laplacian_kernel(kMaxMask)));
+  EXPECT_NO_THROW(plan_frame(20, 10, kMaxMask, 1));
+  const Thrown wider = invalid_argument_of([&] { laplacian_kernel(kMaxMask + 2); });
+  EXPECT_EQ(wider.argument, "mask");
+  EXPECT_TRUE(contains(wider.message, "511")) << wider.message;
+  EXPECT_EQ(invalid_argument_of([&] { plan_frame(20, 10, kMaxMask + 2, 1); }).argument, "mask");
   EXPECT_EQ(invalid_argument_of([&] {
               run_mask_model(out, color, laplacian_kernel(3), {21, 0, 1});
             }).argument,

@@ -56,6 +56,9 @@ void expect_numerical_error(const Call& call, std::ptrdiff_t system,
     return;
   } catch (const NumericalError& e) {
     EXPECT_EQ(e.system(), system) << e.what();
+    // An index not known is left out of the message, never printed as -1.
+    EXPECT_EQ(std::string(e.what()).find("row -1"), std::string::npos) << e.what();
+    EXPECT_EQ(std::string(e.what()).find("system -1"), std::string::npos) << e.what();
     if (row) {
       EXPECT_EQ(e.row(), *row) << e.what();
     } else {
@@ -227,6 +230,37 @@ TYPED_TEST(SolverErrors, NegativeThreadsIsRejected) {
     expect_invalid_argument(
         [&] { solve_diffusion(beta.data(), batch.d.data(), x.data(), batch.layout, with(method, -1)); },
         "threads", -1, -1);
+  }
+}
+
+// More than kMaxThreads (1024) is refused before any work, naming `threads` and the bound:
+// a team of 2^20 overflowed the OpenMP runtime's stacks. The bound itself is accepted.
+TYPED_TEST(SolverErrors, ThreadsAboveTheBoundAreRejected) {
+  using T = TypeParam;
+  using R = real_t<T>;
+  static_assert(kMaxThreads == 1024);
+  auto batch = valid_batch<T>(kN, 3);
+  std::vector<R> beta(batch.d.size(), R(1));
+  std::vector<T> x(batch.d.size());
+  for (Method method : kAllMethods)
+    for (int threads : {kMaxThreads + 1, 1 << 20, std::numeric_limits<int>::max()}) {
+      SCOPED_TRACE(::testing::Message() << to_string(method) << ", threads " << threads);
+      expect_invalid_argument([&] { run(batch, with(method, threads)); }, "threads", -1, -1);
+      expect_invalid_argument([&] {
+        solve_diffusion(beta.data(), batch.d.data(), x.data(), batch.layout, with(method, threads));
+      }, "threads", -1, -1);
+      try {
+        run(batch, with(method, threads));
+      } catch (const InvalidArgument& e) {
+        EXPECT_NE(e.message().find("at most 1024"), std::string::npos) << e.what();
+      }
+    }
+  for (Method method : kAllMethods) {
+    SCOPED_TRACE(to_string(method));
+    const std::vector<T> expected = run(batch, with(method, 1));
+    EXPECT_TRUE(same_bits(run(batch, with(method, kMaxThreads)), expected));
+    EXPECT_NO_THROW(solve_diffusion(beta.data(), batch.d.data(), x.data(), batch.layout,
+                                    with(method, kMaxThreads)));
   }
 }
 
@@ -807,6 +841,18 @@ TYPED_TEST(SolverErrors, NoInputGivesNonFiniteSolutionSilently) {
   // The inputs are wild enough to exercise both outcomes.
   EXPECT_GT(solved, 0);
   EXPECT_GT(refused, 0);
+}
+
+// what() names the system and row when they are known and leaves out the ones that are not
+// (-1): no "row -1", as InvalidArgument does.
+TEST(ErrorMessages, NumericalErrorLeavesOutUnknownIndices) {
+  EXPECT_STREQ(NumericalError(3, 4, "zero pivot").what(), "tridiff: system 3, row 4: zero pivot");
+  EXPECT_STREQ(NumericalError(3, -1, "overflow").what(), "tridiff: system 3: overflow");
+  EXPECT_STREQ(NumericalError(-1, 7, "x").what(), "tridiff: row 7: x");
+  EXPECT_STREQ(NumericalError(-1, -1, "failed").what(), "tridiff: failed");
+  EXPECT_EQ(NumericalError(-1, -1, "failed").row(), -1);
+  EXPECT_STREQ(InvalidArgument("n", -1, -1, "must be >= 1").what(),
+               "tridiff: argument 'n': must be >= 1");
 }
 
 }  // namespace

@@ -1,15 +1,22 @@
 // Option parsing and frame loading shared by `tridiff dof` and `tridiff ipf`.
 #include "common.hpp"
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
+#include <functional>
 #include <sstream>
 
 #include "tridiff/dof/lens.hpp"
 #include "tridiff/dof/scene.hpp"
 #include "tridiff/image/io.hpp"
+#include "tridiff/solvers/solve.hpp"
 
 namespace tridiff::cli {
 
@@ -47,7 +54,7 @@ const std::vector<std::string> kInputOptions = {
     "far",      "color-encoding", "width",         "height",           "focus",
     "f-number", "focal-length",   "sensor-width",  "max-coc",          "near-start",
     "near-end", "near-radius",    "far-start",     "far-end",          "far-radius",
-    "threads"};
+    "threads",  "max-pixels"};
 
 const char* const kInputUsage = R"(input
   --color FILE              colour image (PNG, JPEG, TIFF, OpenEXR, ...)
@@ -57,7 +64,9 @@ const char* const kInputUsage = R"(input
   --depth-convention C      linear (distance, default) | normalized (needs --near, --far) | inverse
   --near M, --far M         planes for the normalized convention, metres
   --color-encoding E        auto (default: 8/16-bit sRGB, float linear) | srgb | linear
-  --width W, --height H     size of the built-in scene (default 1920 x 1080)
+  --width W, --height H     size of the built-in scene (default 1920 x 1080; not with --color)
+  --max-pixels N            larger input images are refused before they are read
+                            (default 268435456, 16384 x 16384)
 lens (thin lens, seed 000 eq. 3.2)
   --focus M                 focus distance, metres (default 3.2; built-in scene: 3.95, its sphere)
   --f-number N              aperture f-number (default 2.8; built-in scene: 1.8)
@@ -65,9 +74,10 @@ lens (thin lens, seed 000 eq. 3.2)
   --sensor-width MM         sensor width the image spans (default 36)
   --max-coc PX              clamp of the lens's CoC diameter (default 64; the artist
                             curve's radii are its own bound)
-artist curve (seed 002 §28.5.3; replaces the lens when any is given)
+artist curve (seed 002 §28.5.3; replaces the lens, so not with the lens options above)
   --near-start M --near-end M --near-radius PX   near blur: radius at near-start, 0 from near-end
   --far-start M --far-end M --far-radius PX      far blur: 0 up to far-start, radius from far-end
+                            a region with a radius needs end > start; radius 0 turns it off
 )";
 
 Arguments parse(int argc, char** argv, int first, const std::vector<std::string>& flags,
@@ -79,13 +89,22 @@ Arguments parse(int argc, char** argv, int first, const std::vector<std::string>
     if (key == "-h") key = "--help";
     if (key.rfind("--", 0) != 0) throw InvalidArgument(key, -1, -1, "unexpected argument");
     key = key.substr(2);
+    // Given twice, one of the two would be ignored: refused, whichever it is.
+    const std::string alias = key == "output" ? " (-o and --output are one option)"
+                              : key == "help" ? " (-h and --help are one option)"
+                                              : "";
     if (std::find(flags.begin(), flags.end(), key) != flags.end()) {
+      if (args.flag(key)) throw InvalidArgument("--" + key, -1, -1, "is given twice" + alias);
       args.flags.push_back(key);
       continue;
     }
     if (std::find(valued.begin(), valued.end(), key) == valued.end())
       throw InvalidArgument("--" + key, -1, -1, "unknown option (see tridiff --help)");
     if (i + 1 >= argc) throw InvalidArgument("--" + key, -1, -1, "needs a value");
+    if (args.has(key))
+      throw InvalidArgument("--" + key, -1, -1,
+                            "is given twice ('" + args.text(key, "") + "' and '" + argv[i + 1] +
+                                "')" + alias);
     args.values[key] = argv[++i];
   }
   return args;
@@ -112,19 +131,43 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
+// body(), with this process's stderr sent to /dev/null meanwhile: libpng prints its own
+// "libpng error: ..." line before OpenImageIO hands the same text to tridiff's message.
+template <class Body>
+auto with_stderr_muted(Body&& body) {
+  std::fflush(stderr);
+  struct Restore {
+    int saved = ::dup(STDERR_FILENO);
+    Restore() {
+      const int null = ::open("/dev/null", O_WRONLY | O_CLOEXEC);
+      if (saved >= 0 && null >= 0) ::dup2(null, STDERR_FILENO);
+      if (null >= 0) ::close(null);
+    }
+    ~Restore() {
+      if (saved < 0) return;
+      std::fflush(stderr);
+      ::dup2(saved, STDERR_FILENO);
+      ::close(saved);
+    }
+  } restore;
+  return body();
+}
+
 // Colour and depth from files, or the built-in scene (whose lens replaces the default one).
 void load_images(const Arguments& args, int threads, Frame& frame, ThinLens& lens) {
   if (args.has("color")) {
     if (!args.has("depth")) throw InvalidArgument("--depth", -1, -1, "is required with --color");
-    frame.color =
-        read_color(args.text("color", ""), parse_encoding(args.text("color-encoding", "auto")))
-            .pixels;
+    const ColorEncoding encoding = parse_encoding(args.text("color-encoding", "auto"));
+    frame.color = with_stderr_muted([&] {
+                    return read_color(args.text("color", ""), encoding, max_pixels(args));
+                  }).pixels;
     DepthOptions depth_options;
     depth_options.channel = args.text("depth-channel", "");
     depth_options.convention = parse_convention(args.text("depth-convention", "linear"));
     depth_options.near_plane = args.number("near", 0.f);
     depth_options.far_plane = args.number("far", 0.f);
-    frame.depth = read_depth(args.text("depth", ""), depth_options);
+    depth_options.max_pixels = max_pixels(args);
+    frame.depth = with_stderr_muted([&] { return read_depth(args.text("depth", ""), depth_options); });
     if (frame.depth.width() != frame.color.width() || frame.depth.height() != frame.color.height())
       throw ImageIoError("tridiff: " + args.text("depth", "") + ": depth is " +
                          std::to_string(frame.depth.width()) + " x " +
@@ -156,24 +199,50 @@ void with_options_named(Body&& body) {
     std::replace(option.begin(), option.end(), '_', '-');
     if (std::find(kInputOptions.begin(), kInputOptions.end(), option) == kInputOptions.end())
       throw;
-    throw InvalidArgument("--" + option, -1, -1, error.message());
+    // The message may name other fields too ("must be beyond near_start"): as options.
+    std::string message = error.message();
+    for (const std::string& other : kInputOptions) {
+      std::string field = other;
+      std::replace(field.begin(), field.end(), '-', '_');
+      if (field == other) continue;  // one word: the same in prose, left alone
+      for (auto at = message.find(field); at != std::string::npos;
+           at = message.find(field, at + other.size() + 2))
+        message.replace(at, field.size(), "--" + other);
+    }
+    throw InvalidArgument("--" + option, -1, -1, message);
   }
+}
+
+const std::vector<std::string> kLensOptions = {"focus", "f-number", "focal-length",
+                                               "sensor-width", "max-coc"};
+const std::vector<std::string> kCurveOptions = {"near-start", "near-end", "far-start",
+                                                "far-end",    "near-radius", "far-radius"};
+
+// The first of `keys` on the command line, or "".
+std::string first_given(const Arguments& args, const std::vector<std::string>& keys) {
+  for (const std::string& key : keys)
+    if (args.has(key)) return key;
+  return "";
+}
+
+ArtistCurve artist_curve(const Arguments& args) {
+  ArtistCurve c;
+  c.near_start_m = args.number("near-start", 0);
+  c.near_end_m = args.number("near-end", 0);
+  c.near_radius_px = args.number("near-radius", 0);
+  c.far_start_m = args.number("far-start", 0);
+  c.far_end_m = args.number("far-end", 0);
+  c.far_radius_px = args.number("far-radius", 0);
+  return c;
 }
 
 // The thin lens, or the artist curve when any of its options is given.
 void compute_coc(const Arguments& args, int threads, ThinLens lens, Frame& frame) {
   frame.coc.reset(frame.color.width(), frame.color.height(), 1);
-  const bool curve = args.has("near-start") || args.has("near-end") || args.has("near-radius") ||
-                     args.has("far-start") || args.has("far-end") || args.has("far-radius");
+  const bool curve = !first_given(args, kCurveOptions).empty();
   std::ostringstream model;
   if (curve) {
-    ArtistCurve c;
-    c.near_start_m = args.number("near-start", 0);
-    c.near_end_m = args.number("near-end", 0);
-    c.near_radius_px = args.number("near-radius", 0);
-    c.far_start_m = args.number("far-start", 0);
-    c.far_end_m = args.number("far-end", 0);
-    c.far_radius_px = args.number("far-radius", 0);
+    const ArtistCurve c = artist_curve(args);
     with_options_named([&] { coc_artist_curve(frame.coc.plane(0), frame.depth.plane(0), c, threads); });
     model << "artist curve: near " << c.near_start_m << "-" << c.near_end_m << " m radius "
           << c.near_radius_px << " px, far " << c.far_start_m << "-" << c.far_end_m << " m radius "
@@ -194,7 +263,70 @@ void compute_coc(const Arguments& args, int threads, ThinLens lens, Frame& frame
 
 }  // namespace
 
+void check_input_options(const Arguments& args) {
+  if (args.has("color"))
+    for (const char* key : {"width", "height"})
+      if (args.has(key))
+        throw InvalidArgument("--" + std::string(key), -1, -1,
+                              "sizes the built-in scene and cannot be used with --color (the "
+                              "image has its own size)");
+  const std::string curve = first_given(args, kCurveOptions);
+  if (curve.empty()) return;
+  const std::string lens = first_given(args, kLensOptions);
+  if (!lens.empty())
+    throw InvalidArgument("--" + lens, -1, -1,
+                          "is a thin-lens option, but --" + curve +
+                              " chooses the artist curve, which replaces the lens: give one "
+                              "or the other");
+  with_options_named([&] { validate(artist_curve(args)); });
+}
+
+void with_coc_named(const Arguments& args, const std::function<void()>& work) {
+  try {
+    work();
+  } catch (const InvalidArgument& error) {
+    // A method refuses the CoC map (too large for it): the map is the one the options made.
+    if (error.argument() != "coc") throw;
+    if (first_given(args, kCurveOptions).empty())
+      throw InvalidArgument("--max-coc", -1, -1,
+                            error.message() + " (the lens's CoC, clamped at --max-coc: lower it)");
+    std::string options;
+    for (const char* key : {"near-radius", "far-radius"})
+      if (args.has(key)) options += (options.empty() ? "--" : "/--") + std::string(key);
+    if (options.empty()) options = "--near-radius/--far-radius";
+    throw InvalidArgument(options, -1, -1,
+                          error.message() + " (the artist curve's CoC: lower its radius)");
+  }
+}
+
+int thread_count(const Arguments& args) {
+  const int threads = args.integer("threads", 0);
+  try {
+    detail::resolve_threads(threads);
+  } catch (const InvalidArgument& error) {
+    throw InvalidArgument("--threads", -1, -1, error.message());
+  }
+  return threads;
+}
+
+std::int64_t max_pixels(const Arguments& args) {
+  if (!args.has("max-pixels")) return kDefaultMaxPixels;
+  const std::string text = args.text("max-pixels", "");
+  char* end = nullptr;
+  errno = 0;
+  const long long value = std::strtoll(text.c_str(), &end, 10);
+  if (end == text.c_str() || *end != '\0' || errno == ERANGE || value < 1)
+    throw InvalidArgument("--max-pixels", -1, -1, "'" + text + "' is not a positive whole number");
+  return value;
+}
+
+void register_inputs(const Arguments& args, OutputFiles& files) {
+  if (args.has("color")) files.input("--color", args.text("color", ""));
+  if (args.has("depth")) files.input("--depth", args.text("depth", ""));
+}
+
 Frame load_frame(const Arguments& args, int threads) {
+  check_input_options(args);  // before any file is read
   Frame frame;
   ThinLens lens;
   const auto load_start = std::chrono::steady_clock::now();

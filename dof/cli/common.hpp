@@ -2,11 +2,14 @@
 // and the CoC map, from files or the built-in scene) from the same image and lens options.
 #pragma once
 
+#include <cstdint>
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
 
 #include "tridiff/image/image.hpp"
+#include "tridiff/image/output_files.hpp"
 
 namespace tridiff::cli {
 
@@ -25,7 +28,8 @@ struct Arguments {
 extern const std::vector<std::string> kInputOptions;
 extern const char* const kInputUsage;
 
-// Parses argv[first..]: `flags` take no value, `valued` take one; anything else is an error.
+// Parses argv[first..]: `flags` take no value, `valued` take one; anything else is an error,
+// and so is an option or flag given twice (-o and --output are one option).
 Arguments parse(int argc, char** argv, int first, const std::vector<std::string>& flags,
                 const std::vector<std::string>& valued);
 
@@ -37,11 +41,50 @@ struct Frame {
 };
 
 // The colour and depth files of --color/--depth, or the built-in scene, and its CoC map.
+// Calls check_input_options first.
 Frame load_frame(const Arguments& args, int threads);
+
+// The input and lens options that cannot go together, checked before anything is read:
+// --width/--height with --color, a lens option with an artist-curve option, and the artist
+// curve itself (e.g. an empty or reversed near range); InvalidArgument naming the option(s).
+void check_input_options(const Arguments& args);
+
+// Runs `work` (a method on the frame's CoC map); a method's InvalidArgument about the map
+// ("coc": too large for it) is named as the options that made it (--max-coc, or the artist
+// curve's --near-radius/--far-radius).
+void with_coc_named(const Arguments& args, const std::function<void()>& work);
+
+// A whole command line: the subcommand (dof, ipf, methods or --help) and its arguments.
+struct CommandLine {
+  std::string command;
+  Arguments args;
+};
+
+// InvalidArgument naming the argument at fault when the command line cannot be parsed.
+CommandLine parse_command_line(int argc, char** argv);
+
+// Parses and checks a command line as run_command_line would before its work: the options,
+// their values and the output paths. Reads no input, does no work, writes nothing; throws a
+// tridiff::Error at the first fault.
+void check_command_line(int argc, char** argv);
+
+// Runs the command line; the exit status (errors are thrown).
+int run_command_line(int argc, char** argv);
+
+// --threads: 0 (all cores) up to the library's bound, or InvalidArgument naming --threads.
+int thread_count(const Arguments& args);
+
+// --max-pixels: the largest input image read (default: the library's 16384 x 16384).
+std::int64_t max_pixels(const Arguments& args);
+
+// Registers the --color and --depth files with `files`: no output may replace them.
+void register_inputs(const Arguments& args, OutputFiles& files);
 
 // The `ipf` subcommand (ipf_command.cpp).
 extern const char* const kIpfUsage;
 int run_ipf(const Arguments& args);
+// Checks an `ipf` command line's options and output as run_ipf does before its work.
+void check_ipf(const Arguments& args);
 extern const std::vector<std::string> kIpfFlags, kIpfValued;
 
 }  // namespace tridiff::cli

@@ -10,6 +10,7 @@
 #include "tridiff/image/io.hpp"
 #include "tridiff/ipf/model.hpp"
 #include "tridiff/ipf/performance.hpp"
+#include "tridiff/solvers/solve.hpp"  // kMaxThreads
 
 namespace tridiff::cli {
 
@@ -25,14 +26,20 @@ program
                             headroom against saturation, Color widens with it)
   --check                   also run the software `ipf` method / direct convolution and compare
 hardware
-  --mask N                  execution mask N x N, odd >= 3 (default 17)
-  --parts P                 vertical parts of the frame (default 4)
-  --register-size S         stages per pipe as built (default: min(w, h) + mask - 1, §4)
-  --clock-mhz F             core clock (default 310)
-  --bandwidth-gbs B         memory bandwidth, 1e9 bytes/s (default 20)
-  --pixels-per-clock K      pixels finished per clock, i.e. units side by side (default 1)
-  --cycles-per-pixel C      program clocks per pixel (default: dof 5, §5; laplacian 1)
-  --threads N               0 = all cores (default)
+  --mask N                  execution mask N x N, odd, 3 to 511 (default 17; fig. 10's
+                            8-bit Radius reaches 255 pixels)
+  --parts P                 vertical parts of the frame, 1 to 1024 (default 4)
+  --register-size S         stages per pipe as built, at most 65536 (default: min(w, h) +
+                            mask - 1, §4)
+  --clock-mhz F             core clock, at most 1e5 (default 310)
+  --bandwidth-gbs B         memory bandwidth, 1e9 bytes/s, at most 1e5 (default 20)
+  --pixels-per-clock K      pixels finished per clock, i.e. units side by side, at most 1024
+                            (default 1)
+  --cycles-per-pixel C      program clocks per pixel, at most 1024 (default: dof 5, §5;
+                            laplacian 1)
+  --threads N               0 = all cores (default), at most 1024
+  A run the model would spend more than 4e10 execution-unit steps (pixels x mask^2, minutes)
+  or 4 GiB of registers on is refused before the built-in scene is rendered (a file: once read).
 output
   -o, --output FILE         result image (default tridiff_ipf.png)
 
@@ -54,11 +61,68 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-// A positive option value, or InvalidArgument naming the option.
-double positive(const Arguments& args, const std::string& key, double fallback) {
+// The bounds of the model's options (kIpfUsage says them). The mask's is the library's
+// (ipf::kMaxMask, fig. 10's 8-bit Radius). A part is a unit of its own (§4 splits a frame in
+// four), a task for one thread: as many as the library's threads. A register of 2^16 stages
+// (17 switches) holds a line of any frame side up to 65536 pixels; §4's unit has 1216. The
+// rates are far beyond any hardware: a hundred GHz, a hundred TB/s, a thousand units side by
+// side, a program of a thousand clocks per pixel.
+constexpr int kMaxParts = kMaxThreads;
+constexpr int kMaxRegisterSize = 1 << 16;
+constexpr double kMaxClockMhz = 1e5, kMaxBandwidthGbs = 1e5;
+constexpr double kMaxPixelsPerClock = 1024, kMaxCyclesPerPixel = 1024;
+// The model's own cost on this computer: pixels x mask^2 unit steps, 2 to 4 x 1e8 a second
+// per core (measured; less for wide masks). 4e10, a minute or two, lets a 3840 x 2160 frame
+// run at mask 65 (3.5e10), the mask the lens's default CoC clamp (64 px, radius 32) needs,
+// and 1920 x 1080 at mask 17 is 6e8 (a second); 1920 x 1080 at mask 255 (1.3e11) or
+// 16384 x 16384 at mask 17 (7.8e10) are refused. And its registers: 4 GiB.
+constexpr double kMaxUnitSteps = 4e10;
+constexpr double kMaxRegisterBytes = 4.0 * (1 << 30);
+
+// A positive option value up to `most`, or InvalidArgument naming the option.
+double positive(const Arguments& args, const std::string& key, double fallback, double most) {
   const double value = args.number(key, float(fallback));
-  if (!(value > 0)) throw InvalidArgument("--" + key, -1, -1, "must be > 0");
+  if (!(value > 0) || value > most) {
+    std::ostringstream text;
+    text << "must be > 0 and at most " << most << ", got " << args.text(key, "");
+    throw InvalidArgument("--" + key, -1, -1, text.str());
+  }
   return value;
+}
+
+// ipf::plan_frame names its arguments ("parts", "register_size", "mask"): as the options.
+ipf::FramePlan plan_as_options(std::ptrdiff_t width, std::ptrdiff_t height,
+                               const ipf::PerformanceInput& hardware) {
+  try {
+    return ipf::plan_frame(width, height, hardware.mask, hardware.parts, hardware.register_size);
+  } catch (const InvalidArgument& error) {
+    std::string option = error.argument();
+    if (option != "parts" && option != "register_size" && option != "mask") throw;
+    std::replace(option.begin(), option.end(), '_', '-');
+    throw InvalidArgument("--" + option, -1, -1, error.message());
+  }
+}
+
+// Refuses a run the model would take hours or gigabytes for, naming --mask (the cost grows
+// with its square) and what else makes it.
+void check_model_cost(std::ptrdiff_t width, std::ptrdiff_t height,
+                      const ipf::PerformanceInput& hardware, int threads) {
+  const ipf::ModelCost cost =
+      ipf::model_cost(plan_as_options(width, height, hardware), threads);
+  std::ostringstream text;
+  text << "a " << width << " x " << height << " frame at mask " << hardware.mask << " in "
+       << hardware.parts << " part(s) ";
+  if (cost.unit_steps > kMaxUnitSteps) {
+    text << "is " << cost.unit_steps << " execution-unit steps for the model (pixels x mask^2), "
+         << "more than its bound " << kMaxUnitSteps << ": use a smaller --mask or frame";
+    throw InvalidArgument("--mask", -1, -1, text.str());
+  }
+  if (cost.register_bytes > kMaxRegisterBytes) {
+    text << "needs " << cost.register_bytes / (1 << 20) << " MiB of model registers, more than "
+         << "its bound " << kMaxRegisterBytes / (1 << 20)
+         << " MiB: use a smaller --mask, --register-size or --threads";
+    throw InvalidArgument("--mask", -1, -1, text.str());
+  }
 }
 
 ipf::DofRule parse_rule(const std::string& text) {
@@ -120,43 +184,99 @@ std::ptrdiff_t differing_values(const Image& a, const Image& b) {
   return differ;
 }
 
-}  // namespace
+// What an `ipf` command line asks for, checked before any input is read.
+struct IpfPlan {
+  int threads = 0;
+  std::string output;
+  OutputFiles files;
+  bool dof = true;
+  int mask = 17, parts = 4, register_stages = 0;
+  ipf::PerformanceInput hardware;
+  ipf::DofProgram program;
+};
 
-int run_ipf(const Arguments& args) {
-  const auto start = std::chrono::steady_clock::now();
-  const int threads = args.integer("threads", 0);
+IpfPlan plan_ipf(const Arguments& args) {
+  IpfPlan plan;
+  plan.threads = thread_count(args);
+  // The output checked before the model runs (it may run for long), written whole or not at all.
+  plan.output = args.text("output", "tridiff_ipf.png");
+  register_inputs(args, plan.files);
+  check_image_path(plan.output);
+  plan.files.claim("--output", plan.output);
   const std::string program_name = args.text("program", "dof");
   if (program_name != "dof" && program_name != "laplacian")
     throw InvalidArgument("--program", -1, -1, "'" + program_name + "' is not dof or laplacian");
-  const bool dof = program_name == "dof";
-  const int mask = args.integer("mask", 17);
-  if (mask < 3 || mask % 2 == 0)
-    throw InvalidArgument("--mask", -1, -1, "must be odd and >= 3, got " + std::to_string(mask));
-  const int parts = args.integer("parts", 4);
-  if (parts < 1)
-    throw InvalidArgument("--parts", -1, -1, "must be >= 1, got " + std::to_string(parts));
-  const int register_stages = args.integer("register-size", 0);
-  if (register_stages < 0) throw InvalidArgument("--register-size", -1, -1, "must be >= 0");
-  ipf::PerformanceInput hardware;
+  plan.dof = program_name == "dof";
+  const int mask = plan.mask = args.integer("mask", 17);
+  if (mask < 3 || mask % 2 == 0 || mask > ipf::kMaxMask)
+    throw InvalidArgument("--mask", -1, -1,
+                          "must be odd and in [3, " + std::to_string(ipf::kMaxMask) +
+                              "] (fig. 10's 8-bit Radius reaches 255 pixels), got " +
+                              std::to_string(mask));
+  const int parts = plan.parts = args.integer("parts", 4);
+  if (parts < 1 || parts > kMaxParts)
+    throw InvalidArgument("--parts", -1, -1,
+                          "must be in [1, " + std::to_string(kMaxParts) + "], got " +
+                              std::to_string(parts));
+  const int register_stages = plan.register_stages = args.integer("register-size", 0);
+  if (register_stages < 0 || register_stages > kMaxRegisterSize)
+    throw InvalidArgument("--register-size", -1, -1,
+                          "must be in [0, " + std::to_string(kMaxRegisterSize) +
+                              "] (0: sized for the frame), got " +
+                              std::to_string(register_stages));
+  const bool dof = plan.dof;
+  if (!dof)
+    for (const char* key : {"rule", "in-focus", "area-weight-bits", "color-weight-bits"})
+      if (args.has(key))
+        throw InvalidArgument("--" + std::string(key), -1, -1,
+                              "applies to --program dof only, not laplacian");
+  ipf::PerformanceInput& hardware = plan.hardware;
   hardware.mask = mask;
   hardware.parts = parts;
   hardware.register_size = register_stages;
-  hardware.clock_hz = positive(args, "clock-mhz", 310) * 1e6;
-  hardware.bandwidth_bytes_per_s = positive(args, "bandwidth-gbs", 20) * 1e9;
-  hardware.pixels_per_clock = positive(args, "pixels-per-clock", 1);
-  hardware.cycles_per_pixel = positive(args, "cycles-per-pixel", dof ? 5 : 1);
+  hardware.clock_hz = positive(args, "clock-mhz", 310, kMaxClockMhz) * 1e6;
+  hardware.bandwidth_bytes_per_s = positive(args, "bandwidth-gbs", 20, kMaxBandwidthGbs) * 1e9;
+  hardware.pixels_per_clock = positive(args, "pixels-per-clock", 1, kMaxPixelsPerClock);
+  hardware.cycles_per_pixel = positive(args, "cycles-per-pixel", dof ? 5 : 1, kMaxCyclesPerPixel);
   hardware.read_bytes_per_pixel = dof ? 8 : 4;  // colour + z; the mask filter reads colour only
-  ipf::DofProgram program;
+  ipf::DofProgram& program = plan.program;
   program.mask = mask;
   program.rule = parse_rule(args.text("rule", "corrected"));
   program.in_focus_coc_px = args.number("in-focus", 1.f);
   program.area_weight_bits = args.integer("area-weight-bits", 8);
   program.color_weight_bits = args.integer("color-weight-bits", 8);
   if (dof) validate_as_options(program);
+  // The built-in scene's size is known before it is rendered; a file's once it is read.
+  if (!args.has("color")) {
+    const int width = args.integer("width", 1920), height = args.integer("height", 1080);
+    if (width >= 1 && height >= 1 && width <= 16384 && height <= 16384)  // else load_frame says
+      check_model_cost(width, height, hardware, plan.threads);
+  }
+  return plan;
+}
+
+}  // namespace
+
+void check_ipf(const Arguments& args) {
+  plan_ipf(args);
+  check_input_options(args);
+}
+
+int run_ipf(const Arguments& args) {
+  const auto start = std::chrono::steady_clock::now();
+  IpfPlan checked = plan_ipf(args);  // every option and the output checked before the work
+  const int threads = checked.threads, mask = checked.mask, parts = checked.parts;
+  const int register_stages = checked.register_stages;
+  const bool dof = checked.dof;
+  const std::string& output = checked.output;
+  OutputFiles& files = checked.files;
+  ipf::PerformanceInput& hardware = checked.hardware;
+  const ipf::DofProgram& program = checked.program;
 
   const Frame frame = load_frame(args, threads);
   hardware.width = frame.color.width();
   hardware.height = frame.color.height();
+  check_model_cost(hardware.width, hardware.height, hardware, threads);
   const ipf::Performance perf = ipf::estimate(hardware);  // also checks the plan fits
 
   ipf::ModelOptions options{parts, register_stages, threads};
@@ -180,8 +300,8 @@ int run_ipf(const Arguments& args) {
             (differ ? std::to_string(differ) + " values differ" : std::string("identical"));
   }
 
-  const std::string output = args.text("output", "tridiff_ipf.png");
-  write_image(output, result);
+  files.stage("--output", encode_image(output, result));
+  files.commit();
 
   const ipf::FramePlan& plan = perf.plan;
   const ipf::PipeLayout layout(plan.register_size);

@@ -17,6 +17,7 @@
 #include "common.hpp"
 #include "tridiff/dof/method.hpp"
 #include "tridiff/image/io.hpp"
+#include "tridiff/image/output_files.hpp"
 
 namespace {
 
@@ -35,13 +36,20 @@ constexpr const char* kDofUsage = R"(method
   --layers                  blur the near field as its own layer (removes the blocking artifact)
   --in-focus PX             |CoC| below this is sharp and skipped (default 1)
   --no-skip                 process in-focus parts too (reference; same result, slower)
-  --threads N               0 = all cores (default)
+  --threads N               0 = all cores (default), at most 1024
 output
   -o, --output FILE         result image (default tridiff_dof.png)
   --coc-output FILE         CoC map (default: <output stem>_coc.png): in .exr the signed
-                            diameter in pixels, one channel; else a false-colour picture
+                            diameter in pixels, one channel; else a false-colour picture;
+                            `none` writes none
   --input-output FILE       also write the input colour (useful with the built-in scene)
   --report FILE             the report as JSON as well as on stdout
+)";
+constexpr const char* kOutputPolicy = R"(
+Outputs are checked before the work and written whole or not at all: each to a new file
+beside its target, renamed into place once every output is written; if one fails, none
+changes. They must be regular files (or not exist yet): a device (/dev/null), a FIFO, a
+socket, a folder, an input file or the file standard output is redirected to is refused.
 )";
 
 const std::vector<std::string> kDofFlags = {"layers", "no-skip", "help"};
@@ -52,6 +60,7 @@ void print_dof_usage() {
   std::fputs(kUsageHead, stdout);
   std::fputs(cli::kInputUsage, stdout);
   std::fputs(kDofUsage, stdout);
+  std::fputs(kOutputPolicy, stdout);
 }
 
 // A false-colour view of the CoC: red for the far field, blue for the near field, black where
@@ -86,95 +95,6 @@ std::function<void(double)> progress_bar() {
 }
 
 namespace fs = std::filesystem;
-
-// The files of one run, written whole or not at all as a set: each is written to a temporary
-// file beside its target, and only once every one is written are they renamed into place
-// (a rename within a folder needs no space and does not fail half-way). A run that fails
-// before commit() leaves no new file behind.
-class OutputFiles {
- public:
-  OutputFiles() = default;
-  OutputFiles(const OutputFiles&) = delete;
-  OutputFiles& operator=(const OutputFiles&) = delete;
-  ~OutputFiles() {
-    std::error_code ignored;
-    for (const Staged& file : files_)
-      if (!file.committed) fs::remove(file.temporary, ignored);
-  }
-
-  // Claims `path` for `option` before any work is done: refuses a path another option
-  // already claimed, a folder, a folder that does not exist or cannot be written.
-  void claim(const std::string& option, const std::string& path, bool image = true) {
-    if (path.empty()) throw InvalidArgument(option, -1, -1, "is empty");
-    std::error_code error;
-    if (fs::is_directory(path, error))
-      throw InvalidArgument(option, -1, -1, "'" + path + "' is a folder");
-    const fs::path target = fs::weakly_canonical(fs::absolute(path), error);
-    for (const Staged& file : files_)
-      if (file.target == target)
-        throw InvalidArgument(option, -1, -1, "'" + path + "' is also the " + file.option + " file");
-    const fs::path folder = target.parent_path();
-    if (!fs::is_directory(folder, error))
-      throw InvalidArgument(option, -1, -1, "'" + path + "': the folder " + folder.string() +
-                                                " does not exist");
-    if (image) check_image_path(path);  // a format OpenImageIO can write
-    // The extension stays last: OpenImageIO picks the format from it.
-    const fs::path temporary = folder / ("." + target.stem().string() + ".partial-" +
-                                         std::to_string(getpid()) + target.extension().string());
-    // Writable now, not found out after the work (and nothing created that an interrupted
-    // run would leave behind).
-    if (access(folder.c_str(), W_OK) != 0)
-      throw InvalidArgument(option, -1, -1, "'" + path + "': cannot write in " + folder.string());
-    files_.push_back({option, path, target, temporary, false});
-  }
-
-  void write_image(const std::string& option, const Image& image,
-                   ColorEncoding encoding = ColorEncoding::Auto) {
-    const Staged& file = find(option);
-    try {
-      tridiff::write_image(file.temporary.string(), image, encoding);
-    } catch (const ImageIoError& error) {
-      // Name the file the user asked for, not the temporary one.
-      std::string message = error.what();
-      const std::string temporary = file.temporary.string();
-      for (auto at = message.find(temporary); at != std::string::npos;
-           at = message.find(temporary, at + file.path.size()))
-        message.replace(at, temporary.size(), file.path);
-      throw ImageIoError(message);
-    }
-  }
-
-  void write_text(const std::string& option, const std::string& text) {
-    const Staged& file = find(option);
-    std::ofstream out(file.temporary);
-    out << text;
-    if (!out.flush()) throw ImageIoError("tridiff: " + file.path + ": cannot write");
-  }
-
-  void commit() {
-    for (Staged& file : files_) {
-      std::error_code error;
-      fs::rename(file.temporary, file.target, error);
-      if (error)
-        throw ImageIoError("tridiff: " + file.path + ": cannot replace the file (" +
-                           error.message() + ")");
-      file.committed = true;
-    }
-  }
-
- private:
-  struct Staged {
-    std::string option, path;  // as given
-    fs::path target, temporary;
-    bool committed;
-  };
-  const Staged& find(const std::string& option) const {
-    for (const Staged& file : files_)
-      if (file.option == option) return file;
-    throw std::logic_error("OutputFiles: " + option + " was not claimed");
-  }
-  std::vector<Staged> files_;
-};
 
 // `text` as a JSON string literal.
 std::string json_string(const std::string& text) {
@@ -212,33 +132,55 @@ std::string default_coc_path(const std::string& output) {
   return (p.parent_path() / (p.stem().string() + "_coc.png")).string();
 }
 
+// What a `tridiff dof` command line asks for, checked before any input is read.
+struct DofPlan {
+  int threads = 0;
+  const DofMethod* method = nullptr;
+  std::string output, coc_output;  // coc_output empty: not written
+  DofSettings settings;
+  OutputFiles files;
+};
+
+DofPlan plan_dof(const cli::Arguments& args) {
+  DofPlan plan;
+  plan.threads = cli::thread_count(args);
+  plan.method = &find_dof_method(args.text("method", "adi"));
+  plan.settings.threads = plan.threads;
+  plan.settings.layers = args.flag("layers");
+  plan.settings.skip_in_focus = !args.flag("no-skip");
+  plan.settings.in_focus_coc_px = args.number("in-focus", 1.f);
+  plan.settings.error_budget_psnr = args.number("psnr-budget", 30.f);
+  plan.output = args.text("output", "tridiff_dof.png");
+  plan.coc_output = args.text("coc-output", default_coc_path(plan.output));
+  if (plan.coc_output == "none") plan.coc_output.clear();
+  cli::register_inputs(args, plan.files);
+  const auto claim_image = [&](const std::string& option, const std::string& path) {
+    check_image_path(path);  // a format that can be written
+    plan.files.claim(option, path);
+  };
+  claim_image("--output", plan.output);
+  if (!plan.coc_output.empty()) claim_image("--coc-output", plan.coc_output);
+  if (args.has("input-output")) claim_image("--input-output", args.text("input-output", ""));
+  if (args.has("report")) plan.files.claim("--report", args.text("report", ""));
+  return plan;
+}
+
 int run_dof(const cli::Arguments& args) {
   const auto start = std::chrono::steady_clock::now();
   auto seconds = [](auto from) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - from).count();
   };
-  const int threads = args.integer("threads", 0);
-  const DofMethod& method = find_dof_method(args.text("method", "adi"));  // fail before work
-  const std::string output = args.text("output", "tridiff_dof.png");
-  const std::string coc_output = args.text("coc-output", default_coc_path(output));
-  OutputFiles outputs;  // every path checked before the work
-  outputs.claim("--output", output);
-  outputs.claim("--coc-output", coc_output);
-  if (args.has("input-output")) outputs.claim("--input-output", args.text("input-output", ""));
-  if (args.has("report")) outputs.claim("--report", args.text("report", ""), false);
+  DofPlan plan = plan_dof(args);  // every option and output path checked before the work
+  const DofMethod& method = *plan.method;
+  OutputFiles& outputs = plan.files;
 
-  cli::Frame frame = cli::load_frame(args, threads);
+  cli::Frame frame = cli::load_frame(args, plan.threads);
   const Image& color = frame.color;
   const Image& coc = frame.coc;
   const std::string& source = frame.source;
   const double load_seconds = frame.load_seconds, coc_seconds = frame.coc_seconds;
 
-  DofSettings settings;
-  settings.threads = threads;
-  settings.layers = args.flag("layers");
-  settings.skip_in_focus = !args.flag("no-skip");
-  settings.in_focus_coc_px = args.number("in-focus", 1.f);
-  settings.error_budget_psnr = args.number("psnr-budget", 30.f);
+  DofSettings settings = plan.settings;
   settings.progress = progress_bar();
   DofReport report;
   // A method that works in place (adi) blurs the frame where it lies: the tiles in focus are
@@ -247,14 +189,17 @@ int run_dof(const cli::Arguments& args) {
   Image separate_result;
   Image& result = in_place ? frame.color : separate_result;
   const auto method_start = std::chrono::steady_clock::now();
-  method.run(result, color, coc.plane(0), settings, report);
+  cli::with_coc_named(args, [&] { method.run(result, color, coc.plane(0), settings, report); });
   const double method_seconds = seconds(method_start);
 
   const auto write_start = std::chrono::steady_clock::now();
-  outputs.write_image("--output", result);
-  outputs.write_image("--coc-output", coc_output_image(coc_output, coc.plane(0)),
-                      ColorEncoding::Linear);
-  if (args.has("input-output")) outputs.write_image("--input-output", color);
+  outputs.stage("--output", encode_image(plan.output, result));
+  if (!plan.coc_output.empty())
+    outputs.stage("--coc-output", encode_image(plan.coc_output,
+                                               coc_output_image(plan.coc_output, coc.plane(0)),
+                                               ColorEncoding::Linear));
+  if (args.has("input-output"))
+    outputs.stage("--input-output", encode_image(args.text("input-output", ""), color));
   const double write_seconds = seconds(write_start);
 
   std::ostringstream text, json;
@@ -268,7 +213,8 @@ int run_dof(const cli::Arguments& args) {
   text << "  time     input " << load_seconds * 1e3 << " ms, coc " << coc_seconds * 1e3 << " ms, ";
   for (const DofStage& stage : report.stages) text << stage.name << " " << stage.seconds * 1e3 << " ms, ";
   text << "write " << write_seconds * 1e3 << " ms, total " << seconds(start) * 1e3 << " ms\n"
-       << "  wrote    " << output << ", " << coc_output << "\n";
+       << "  wrote    " << plan.output << (plan.coc_output.empty() ? "" : ", " + plan.coc_output)
+       << "\n";
   if (!report.notes.empty()) text << "  notes    " << report.notes << "\n";
 
   if (args.has("report")) {
@@ -282,7 +228,7 @@ int run_dof(const cli::Arguments& args) {
     for (const DofStage& stage : report.stages)
       json << ", " << json_string(stage.name) << ": " << stage.seconds;
     json << ", \"method\": " << method_seconds << ", \"write\": " << write_seconds << "}\n}\n";
-    outputs.write_text("--report", json.str());
+    outputs.stage("--report", json.str());
   }
   outputs.commit();
   std::fputs(text.str().c_str(), stdout);
@@ -298,37 +244,71 @@ int list_methods() {
   return 0;
 }
 
+// The options of `tridiff dof`: the input and lens options, then its own.
+std::vector<std::string> dof_valued_options() {
+  std::vector<std::string> valued = cli::kInputOptions;
+  valued.insert(valued.end(), kDofOptions.begin(), kDofOptions.end());
+  return valued;
+}
+
+// `tridiff methods` and `tridiff --help` take nothing after them.
+void refuse_arguments_after(int argc, char** argv) {
+  if (argc > 2)
+    throw InvalidArgument(argv[2], -1, -1,
+                          std::string("unexpected argument after '") + argv[1] + "'");
+}
+
 }  // namespace
 
-int main(int argc, char** argv) {
-  try {
-    const std::string command = argc > 1 ? argv[1] : "--help";
-    if (command == "--help" || command == "-h" || command == "help") {
-      print_dof_usage();
-      return argc > 1 ? 0 : 2;
-    }
-    if (command == "methods") return list_methods();
-    if (command == "ipf") {
-      const cli::Arguments args = cli::parse(argc, argv, 2, cli::kIpfFlags, cli::kIpfValued);
-      if (args.flag("help")) {
-        std::fputs(cli::kIpfUsage, stdout);
-        std::fputs(cli::kInputUsage, stdout);
-        return 0;
-      }
-      return cli::run_ipf(args);
-    }
-    if (command != "dof")
-      throw InvalidArgument(command, -1, -1, "unknown command (expected dof, ipf or methods)");
-    std::vector<std::string> valued = cli::kInputOptions;
-    valued.insert(valued.end(), kDofOptions.begin(), kDofOptions.end());
-    const cli::Arguments args = cli::parse(argc, argv, 2, kDofFlags, valued);
-    if (args.flag("help")) {
-      print_dof_usage();
+namespace tridiff::cli {
+
+CommandLine parse_command_line(int argc, char** argv) {
+  if (argc < 2) throw InvalidArgument("command", -1, -1, "missing (dof, ipf, methods or --help)");
+  CommandLine line{argv[1], {}};
+  if (line.command == "-h" || line.command == "help") line.command = "--help";
+  if (line.command == "--help" || line.command == "methods") {
+    refuse_arguments_after(argc, argv);
+  } else if (line.command == "ipf") {
+    line.args = parse(argc, argv, 2, kIpfFlags, kIpfValued);
+  } else if (line.command == "dof") {
+    line.args = parse(argc, argv, 2, kDofFlags, dof_valued_options());
+  } else {
+    throw InvalidArgument(line.command, -1, -1, "unknown command (expected dof, ipf or methods)");
+  }
+  return line;
+}
+
+void check_command_line(int argc, char** argv) {
+  const CommandLine line = parse_command_line(argc, argv);
+  if (line.args.flag("help")) return;
+  if (line.command == "dof") {
+    plan_dof(line.args);
+    check_input_options(line.args);
+  }
+  if (line.command == "ipf") check_ipf(line.args);
+}
+
+int run_command_line(int argc, char** argv) {
+  if (argc < 2) {  // a bare `tridiff`: how to use it, as an error
+    std::fputs(kUsageHead, stderr);
+    return 2;
+  }
+  const CommandLine line = parse_command_line(argc, argv);
+  if (line.command == "--help" || (line.command == "dof" && line.args.flag("help"))) {
+    print_dof_usage();
+    return 0;
+  }
+  if (line.command == "methods") return list_methods();
+  if (line.command == "ipf") {
+    if (line.args.flag("help")) {
+      std::fputs(kIpfUsage, stdout);
+      std::fputs(kInputUsage, stdout);
+      std::fputs(kOutputPolicy, stdout);
       return 0;
     }
-    return run_dof(args);
-  } catch (const std::exception& error) {
-    std::fprintf(stderr, "%s\n", error.what());
-    return 1;
+    return run_ipf(line.args);
   }
+  return run_dof(line.args);
 }
+
+}  // namespace tridiff::cli

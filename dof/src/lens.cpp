@@ -61,8 +61,20 @@ void validate(const ArtistCurve& curve) {
   require_non_negative(curve.far_end_m, "far_end");
   require_non_negative(curve.near_radius_px, "near_radius");
   require_non_negative(curve.far_radius_px, "far_radius");
-  const bool near = curve.near_end_m > curve.near_start_m && curve.near_radius_px > 0;
-  const bool far = curve.far_end_m > curve.far_start_m && curve.far_radius_px > 0;
+  // A region with a radius must have a ramp: an empty or reversed one would blur nothing,
+  // silently. A radius of 0 is how a region is turned off.
+  if (curve.near_radius_px > 0 && !(curve.near_end_m > curve.near_start_m))
+    throw InvalidArgument("near_end", -1, -1,
+                          "must be beyond near_start (" + std::to_string(curve.near_start_m) +
+                              " m) when near_radius is > 0, got " +
+                              std::to_string(curve.near_end_m) + " m");
+  if (curve.far_radius_px > 0 && !(curve.far_end_m > curve.far_start_m))
+    throw InvalidArgument("far_end", -1, -1,
+                          "must be beyond far_start (" + std::to_string(curve.far_start_m) +
+                              " m) when far_radius is > 0, got " +
+                              std::to_string(curve.far_end_m) + " m");
+  const bool near = curve.near_radius_px > 0;
+  const bool far = curve.far_radius_px > 0;
   if (near && far && curve.far_start_m < curve.near_end_m)
     throw InvalidArgument("far_start", -1, -1, "the far region must start at or after near_end");
 }

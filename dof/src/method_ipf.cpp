@@ -14,10 +14,21 @@
 namespace tridiff {
 namespace ipf {
 
-void validate(const DofProgram& program) {
-  if (program.mask < 3 || program.mask % 2 == 0)
+namespace {
+
+// The mask's size: odd, in [3, kMaxMask].
+void require_mask(int size) {
+  if (size < 3 || size % 2 == 0 || size > kMaxMask)
     throw InvalidArgument("mask", -1, -1,
-                          "must be odd and >= 3, got " + std::to_string(program.mask));
+                          "must be odd and in [3, " + std::to_string(kMaxMask) +
+                              "] (fig. 10's 8-bit Radius reaches 255 pixels), got " +
+                              std::to_string(size));
+}
+
+}  // namespace
+
+void validate(const DofProgram& program) {
+  require_mask(program.mask);
   if (!(program.in_focus_coc_px >= 0.f) || !std::isfinite(program.in_focus_coc_px))
     throw InvalidArgument("in_focus_coc_px", -1, -1, "must be finite and >= 0");
   if (program.area_weight_bits < 1 || program.area_weight_bits > 16)
@@ -65,8 +76,7 @@ PipeData DofQuantizer::pipe_data(const float* lanes, int channels, float z, floa
 }
 
 MaskKernel laplacian_kernel(int size) {
-  if (size < 3 || size % 2 == 0)
-    throw InvalidArgument("mask", -1, -1, "must be odd and >= 3, got " + std::to_string(size));
+  require_mask(size);
   MaskKernel kernel{size, std::vector<int>(std::size_t(size) * size, 0)};
   const int h = size / 2;
   kernel.weights[h * size + h] = 4;
@@ -76,9 +86,7 @@ MaskKernel laplacian_kernel(int size) {
 }
 
 void validate(const MaskKernel& kernel) {
-  if (kernel.size < 3 || kernel.size % 2 == 0)
-    throw InvalidArgument("mask", -1, -1,
-                          "must be odd and >= 3, got " + std::to_string(kernel.size));
+  require_mask(kernel.size);
   if (kernel.weights.size() != std::size_t(kernel.size) * kernel.size)
     throw InvalidArgument("weights", -1, -1, "must hold mask x mask values");
   int magnitude = 0;

@@ -5,21 +5,12 @@
 #include <cmath>
 #include <string>
 
-#ifdef _OPENMP
-#include <omp.h>
-#endif
+#include "tridiff/solvers/solve.hpp"  // detail::resolve_threads: one meaning of `threads`
 
 namespace tridiff {
 namespace {
 
-int thread_count(int threads) {
-#ifdef _OPENMP
-  return threads > 0 ? threads : omp_get_max_threads();
-#else
-  (void)threads;
-  return 1;
-#endif
-}
+int thread_count(int threads) { return detail::resolve_threads(threads); }
 
 // The tile's own statistics from its pixels.
 TileInfo classify(ConstPlane coc, const Rect& area, float in_focus) {

@@ -2,6 +2,7 @@
 // writes that leave either the whole new file or the old one (temporary file + rename).
 #include "tridiff/image/io.hpp"
 
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 #include <unistd.h>
 
@@ -18,6 +19,7 @@
 #include <utility>
 
 #include "tridiff/image/color.hpp"
+#include "tridiff/image/output_files.hpp"
 
 namespace tridiff {
 namespace {
@@ -50,10 +52,15 @@ std::string extension_of(const std::string& path) {
 
 // OpenImageIO keeps errors both on the object and per thread; reading (and so clearing) both
 // keeps a stale message from showing up in a later, unrelated error.
+// On one line: a plugin's message may hold several, one per layer of the library.
 std::string oiio_error(const std::string& object_error = {}) {
   const std::string global = OIIO::geterror();
-  if (object_error.empty()) return global.empty() ? "no reason given" : global;
-  return object_error;
+  std::string text = object_error.empty() ? global : object_error;
+  if (text.empty()) return "no reason given";
+  while (!text.empty() && text.back() == '\n') text.pop_back();
+  for (auto at = text.find('\n'); at != std::string::npos; at = text.find('\n', at))
+    text.replace(at, 1, "; ");
+  return text;
 }
 
 // Whether OpenImageIO has a reader registered for the extension of `path`.
@@ -72,10 +79,33 @@ bool known_read_extension(const std::string& path) {
   return false;
 }
 
+std::string first_line(const std::string& text) { return text.substr(0, text.find('\n')); }
+
+// `count` values, or an ImageIoError naming the file instead of a bare std::bad_alloc.
+template <class T>
+std::vector<T> allocate(const std::string& path, std::size_t count) {
+  try {
+    return std::vector<T>(count);
+  } catch (const std::bad_alloc&) {
+    fail(path, "not enough memory for its " + std::to_string(count) + " values (" +
+                   std::to_string(count * sizeof(T) >> 20) + " MiB)");
+  }
+}
+
+// body(), with std::bad_alloc turned into an ImageIoError naming the file.
+template <class Body>
+auto with_memory_named(const std::string& path, Body&& body) {
+  try {
+    return body();
+  } catch (const std::bad_alloc&) {
+    fail(path, "not enough memory to read it");
+  }
+}
+
 // ---------------------------------------------------------------------------------------------
 // Reading
 
-std::unique_ptr<OIIO::ImageInput> open_input(const std::string& path) {
+std::unique_ptr<OIIO::ImageInput> open_input(const std::string& path, std::int64_t max_pixels) {
   std::error_code error;
   const fs::file_status status = fs::status(path, error);
   if (status.type() == fs::file_type::not_found) fail(path, "file not found");
@@ -97,6 +127,14 @@ std::unique_ptr<OIIO::ImageInput> open_input(const std::string& path) {
   if (spec.deep) fail(path, "deep images are not supported");
   if (spec.depth > 1) fail(path, "volume images are not supported");
   if (spec.width < 1 || spec.height < 1 || spec.nchannels < 1) fail(path, "has no pixels");
+  // From the header, before a byte of pixels is allocated: a few bytes of file can declare
+  // gigapixels.
+  const std::int64_t pixels = std::int64_t(spec.width) * spec.height;
+  if (pixels > max_pixels)
+    fail(path, "is " + std::to_string(spec.width) + " x " + std::to_string(spec.height) + " = " +
+                   std::to_string(pixels) + " pixels, more than the limit of " +
+                   std::to_string(max_pixels) +
+                   " (max_pixels; the tridiff command's --max-pixels)");
   return input;
 }
 
@@ -106,11 +144,17 @@ std::unique_ptr<OIIO::ImageInput> open_input(const std::string& path) {
 std::vector<float> read_interleaved(OIIO::ImageInput& input, const std::string& path, int begin,
                                     int end) {
   const OIIO::ImageSpec& spec = input.spec();
-  std::vector<float> pixels(static_cast<std::size_t>(spec.width) *
-                            static_cast<std::size_t>(spec.height) *
-                            static_cast<std::size_t>(end - begin));
+  const std::size_t values = static_cast<std::size_t>(spec.width) *
+                             static_cast<std::size_t>(spec.height) *
+                             static_cast<std::size_t>(end - begin);
+  std::vector<float> pixels = allocate<float>(path, values);
   if (!input.read_image(0, 0, begin, end, OIIO::TypeDesc::FLOAT, pixels.data()))
     fail(path, "cannot read the pixels (" + oiio_error(input.geterror()) + ")");
+  // Some readers (TIFF) report missing strips only here and return success with the pixels
+  // they could not read left black.
+  if (const std::string damage = input.geterror(); !damage.empty())
+    fail(path, "cannot read the pixels (the file is damaged or truncated: " +
+                   first_line(damage) + ")");
   return pixels;
 }
 
@@ -367,20 +411,22 @@ OutputFormat choose_output_format(const std::string& extension, const Image& ima
   return {OIIO::TypeDesc::UINT8, srgb};
 }
 
-// Refuses, before any file is touched, what would fail late or not at all in the writer.
+// Refuses, without touching the disk, a path whose format cannot be written: the extension
+// picks OpenImageIO's writer, and it must be able to encode into memory, where its result can
+// be checked and written with checked writes (see OutputFiles): some writers ignore a full
+// disk, and libjpeg ends the process on a failed write.
 void check_path(const std::string& path, const std::string& extension) {
   if (extension.empty())
     fail(path, "has no extension to choose the image format from (.png, .jpg, .tif, .exr ...)");
-  // OpenImageIO picks the writer from the extension alone, without touching the disk.
-  if (!OIIO::ImageOutput::create(path)) {
+  const auto output = OIIO::ImageOutput::create(path);
+  if (!output) {
     oiio_error();  // clear it: our message says the same
     fail(path, "unknown image format '." + extension + "' (OpenImageIO has no writer for it)");
   }
-  std::error_code error;
-  if (fs::is_directory(path, error)) fail(path, "is a folder");
-  const fs::path folder = fs::path(path).parent_path();
-  if (!folder.empty() && !fs::is_directory(folder, error))
-    fail(path, "folder " + quote(folder.string()) + " does not exist");
+  if (!output->supports("ioproxy"))
+    fail(path, "tridiff cannot write the '" + std::string(output->format_name()) +
+                   "' format (its writer cannot encode into memory, where tridiff checks a "
+                   "write before it replaces a file); use .exr, .png, .tif, .jpg, .hdr ...");
 }
 
 void check_output(const std::string& path, const std::string& extension, const Image& image) {
@@ -397,7 +443,8 @@ void check_output(const std::string& path, const std::string& extension, const I
   }
 }
 
-OIIO::ImageSpec output_spec(const Image& image, const OutputFormat& format) {
+OIIO::ImageSpec output_spec(const Image& image, const OutputFormat& format,
+                            const std::string& extension) {
   const int channels = image.channels();
   OIIO::ImageSpec spec(static_cast<int>(image.width()), static_cast<int>(image.height()),
                        channels, format.type);
@@ -408,7 +455,11 @@ OIIO::ImageSpec output_spec(const Image& image, const OutputFormat& format) {
     spec.channelnames = channels == 1 ? std::vector<std::string>{"Y"}
                                       : std::vector<std::string>{"Y", "A"};
   spec.alpha_channel = channels == 2 ? 1 : channels >= 4 ? 3 : -1;
-  spec.attribute("oiio:ColorSpace", format.srgb ? "sRGB" : "Linear");
+  // OpenImageIO 2.4's TIFF writer, encoding into memory, emits a directory without its
+  // image size when told "sRGB" (it adds an EXIF block); integer TIFF means sRGB to readers
+  // (read_color's Auto among them) anyway.
+  if (!(format.srgb && (extension == "tif" || extension == "tiff")))
+    spec.attribute("oiio:ColorSpace", format.srgb ? "sRGB" : "Linear");
   // Our alpha is straight: tell the writer not to divide colour by it.
   if (spec.alpha_channel >= 0) spec.attribute("oiio:UnassociatedAlpha", 1);
   return spec;
@@ -444,50 +495,43 @@ std::vector<T> quantise(const Image& image, bool srgb) {
   });
 }
 
-// A name next to `target` that no other writer (thread or process) uses: "name.tmp-<pid>-<n>.png".
-// The extension stays last because OpenImageIO picks the format from it.
-fs::path temporary_path(const fs::path& target) {
-  static std::atomic<unsigned long> counter{0};
-  const std::string name = target.stem().string() + ".tmp-" + std::to_string(::getpid()) + "-" +
-                           std::to_string(counter++) + target.extension().string();
-  return target.parent_path() / name;
+// Refuses encoded bytes whose header does not read back as the image written: a writer
+// encoding into memory is a less travelled path of some formats (see output_spec).
+void check_encoded(const std::string& path, const OIIO::ImageSpec& spec,
+                   const std::vector<unsigned char>& bytes) {
+  OIIO::Filesystem::IOMemReader memory(bytes.data(), bytes.size());
+  void* proxy = &memory;
+  OIIO::ImageSpec config;
+  config.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy);
+  const auto input = OIIO::ImageInput::open(path, &config);
+  if (!input)
+    fail(path, "the encoded file does not read back (" + first_line(oiio_error()) +
+                   "); nothing was written");
+  if (input->spec().width != spec.width || input->spec().height != spec.height)
+    fail(path, "the encoded file reads back as " + std::to_string(input->spec().width) + " x " +
+                   std::to_string(input->spec().height) + "; nothing was written");
 }
 
-// Removes the temporary file unless it was renamed into place.
-class TemporaryFile {
- public:
-  explicit TemporaryFile(fs::path path) : path_(std::move(path)) {}
-  TemporaryFile(const TemporaryFile&) = delete;
-  TemporaryFile& operator=(const TemporaryFile&) = delete;
-  ~TemporaryFile() {
-    std::error_code ignored;
-    if (!kept_) fs::remove(path_, ignored);
-  }
-  const fs::path& path() const { return path_; }
-  void keep() { kept_ = true; }
-
- private:
-  fs::path path_;
-  bool kept_ = false;
-};
-
-void write_file(const std::string& path, const std::string& file, const OIIO::ImageSpec& spec,
-                OIIO::TypeDesc type, const void* pixels) {
-  auto output = OIIO::ImageOutput::create(file);
+// The file's bytes as the writer for `path`'s format encodes them.
+std::vector<unsigned char> encode(const std::string& path, const OIIO::ImageSpec& spec,
+                                  OIIO::TypeDesc type, const void* pixels) {
+  std::vector<unsigned char> bytes;
+  OIIO::Filesystem::IOVecOutput memory(bytes);
+  auto output = OIIO::ImageOutput::create(path);
   if (!output) fail(path, "unknown image format (" + oiio_error() + ")");
-  if (!output->open(file, spec))
-    fail(path, "cannot write (" + oiio_error(output->geterror()) + ")");
+  output->set_ioproxy(&memory);
+  if (!output->open(path, spec))
+    fail(path, "cannot encode (" + oiio_error(output->geterror()) + ")");
   bool written = output->write_image(type, pixels);
   written = output->close() && written;
-  if (!written) fail(path, "cannot write (" + oiio_error(output->geterror()) + ")");
+  if (!written) fail(path, "cannot encode (" + oiio_error(output->geterror()) + ")");
+  check_encoded(path, spec, bytes);
+  return bytes;
 }
 
-}  // namespace
-
-// ---------------------------------------------------------------------------------------------
-
-ColorImage read_color(const std::string& path, ColorEncoding encoding) {
-  const auto input = open_input(path);
+ColorImage read_color_image(const std::string& path, ColorEncoding encoding,
+                            std::int64_t max_pixels) {
+  const auto input = open_input(path, max_pixels);
   const OIIO::ImageSpec& spec = input->spec();
   const ColorChannels chosen = choose_color_channels(spec);
 
@@ -520,9 +564,9 @@ ColorImage read_color(const std::string& path, ColorEncoding encoding) {
   return {std::move(image), held};
 }
 
-Image read_depth(const std::string& path, const DepthOptions& options) {
+Image read_depth_image(const std::string& path, const DepthOptions& options) {
   check_depth_options(options);
-  const auto input = open_input(path);
+  const auto input = open_input(path, options.max_pixels);
   const OIIO::ImageSpec& spec = input->spec();
   const DepthValues values = read_depth_values(*input, path, options.channel);
 
@@ -540,35 +584,43 @@ Image read_depth(const std::string& path, const DepthOptions& options) {
   return depth;
 }
 
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+
+ColorImage read_color(const std::string& path, ColorEncoding encoding, std::int64_t max_pixels) {
+  return with_memory_named(path, [&] { return read_color_image(path, encoding, max_pixels); });
+}
+
+Image read_depth(const std::string& path, const DepthOptions& options) {
+  return with_memory_named(path, [&] { return read_depth_image(path, options); });
+}
 void check_image_path(const std::string& path) { check_path(path, extension_of(path)); }
 
-void write_image(const std::string& path, const Image& image, ColorEncoding encoding) {
+std::vector<unsigned char> encode_image(const std::string& path, const Image& image,
+                                        ColorEncoding encoding) {
   const std::string extension = extension_of(path);
   check_output(path, extension, image);
   const OutputFormat format = choose_output_format(extension, image, encoding);
-  const OIIO::ImageSpec spec = output_spec(image, format);
+  const OIIO::ImageSpec spec = output_spec(image, format, extension);
+  if (format.type == OIIO::TypeDesc::UINT8)
+    return encode(path, spec, format.type, quantise<std::uint8_t>(image, format.srgb).data());
+  if (format.type == OIIO::TypeDesc::UINT16)
+    return encode(path, spec, format.type, quantise<std::uint16_t>(image, format.srgb).data());
+  // Float formats take linear values as they are; the writer rounds to half when asked.
+  const auto pixels = interleave<float>(image, [](float value, bool) { return value; });
+  return encode(path, spec, OIIO::TypeDesc::FLOAT, pixels.data());
+}
 
-  TemporaryFile temporary(temporary_path(path));
-  if (format.type == OIIO::TypeDesc::UINT8) {
-    write_file(path, temporary.path().string(), spec, format.type,
-               quantise<std::uint8_t>(image, format.srgb).data());
-  } else if (format.type == OIIO::TypeDesc::UINT16) {
-    write_file(path, temporary.path().string(), spec, format.type,
-               quantise<std::uint16_t>(image, format.srgb).data());
-  } else {
-    // Float formats take linear values as they are; the writer rounds to half when asked.
-    const auto pixels = interleave<float>(image, [](float value, bool) { return value; });
-    write_file(path, temporary.path().string(), spec, OIIO::TypeDesc::FLOAT, pixels.data());
-  }
-
-  std::error_code error;
-  fs::rename(temporary.path(), path, error);
-  if (error) fail(path, "cannot replace the file (" + error.message() + ")");
-  temporary.keep();
+void write_image(const std::string& path, const Image& image, ColorEncoding encoding) {
+  OutputFiles file;
+  file.claim("", path);
+  file.stage("", encode_image(path, image, encoding));
+  file.commit();
 }
 
 std::vector<std::string> channel_names(const std::string& path) {
-  return open_input(path)->spec().channelnames;
+  return open_input(path, std::numeric_limits<std::int64_t>::max())->spec().channelnames;
 }
 
 }  // namespace tridiff

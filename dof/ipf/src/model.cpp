@@ -6,6 +6,7 @@
 // clocks later) without moving every stage in software.
 #include "tridiff/ipf/model.hpp"
 
+#include <algorithm>
 #include <string>
 #include <utility>
 
@@ -222,6 +223,22 @@ void require_lanes(const Image& color) {
 }
 
 }  // namespace
+
+ModelCost model_cost(const FramePlan& plan, int threads) {
+  const int team = tridiff::detail::resolve_threads(threads);
+  const double n = plan.mask;
+  ModelCost cost;
+  double largest_part = 0;
+  for (const Part& part : plan.parts) {
+    cost.unit_steps += double(part.count) * double(plan.scan_lines) * n * n;
+    // run_part's registers: n mask rows of n stages, n - 1 pipes of the rest of a line.
+    const double cells = n * n + (n - 1) * double(plan.line_length(part) - plan.mask);
+    largest_part = std::max(largest_part, cells * double(sizeof(Cell)));
+  }
+  const std::size_t at_once = std::min(plan.parts.size(), std::size_t(team));
+  cost.register_bytes = double(at_once) * largest_part;
+  return cost;
+}
 
 RunCounts run_dof_model(Image& out, const Image& color, ConstPlane z, ConstPlane coc,
                         const DofProgram& program, const ModelOptions& options) {

@@ -64,8 +64,10 @@ std::vector<Part> vertical_parts(std::ptrdiff_t width, int parts) {
 
 FramePlan plan_frame(std::ptrdiff_t width, std::ptrdiff_t height, int mask, int parts,
                      std::ptrdiff_t size) {
-  if (mask < 3 || mask % 2 == 0)
-    throw InvalidArgument("mask", -1, -1, "must be odd and >= 3, got " + std::to_string(mask));
+  if (mask < 3 || mask % 2 == 0 || mask > kMaxMask)
+    throw InvalidArgument("mask", -1, -1,
+                          "must be odd and in [3, " + std::to_string(kMaxMask) + "], got " +
+                              std::to_string(mask));
   if (parts < 1)
     throw InvalidArgument("parts", -1, -1, "must be >= 1, got " + std::to_string(parts));
   if (width < 1 || height < 1) throw InvalidArgument("size", -1, -1, "frame is empty");

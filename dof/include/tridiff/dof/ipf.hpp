@@ -17,6 +17,11 @@ namespace tridiff::ipf {
 // fourth lane lets RGBA images through).
 constexpr int kMaxLanes = 4;
 
+// The widest execution mask: fig. 10's Radius register has 8 bits, so no pixel reaches beyond
+// 255 pixels and a mask wider than 2 x 255 + 1 only adds units nothing can reach (and the
+// model's work grows with the mask's square). validate() refuses a wider one.
+constexpr int kMaxMask = 511;
+
 // Fig. 11's second condition as printed reads `positionCoCRadius < curDistance`: a background
 // centre then reaches every nearer pixel *outside* that pixel's CoC, so a sharp foreground pixel
 // (radius 0) averages in every farther pixel of the mask and is washed out. The text beside it
@@ -27,7 +32,8 @@ constexpr int kMaxLanes = 4;
 enum class DofRule { corrected, as_printed };
 
 struct DofProgram {
-  int mask = 17;                // n of the n x n execution mask (odd, >= 3); radius <= (n-1)/2
+  int mask = 17;                // n of the n x n execution mask (odd, in [3, kMaxMask]);
+                                // radius <= (n-1)/2
   float in_focus_coc_px = 1.f;  // |CoC| diameter below this gets radius 0 (never dithered up)
   DofRule rule = DofRule::corrected;
   // Fig. 10: AreaWeight 8 bit, ColorWeight (the weight accumulator) 8 bit, Color 48 bit = three
@@ -150,7 +156,7 @@ inline std::int32_t dof_output(std::int32_t color, std::int32_t weight) {
 // positionWeight, positionWeight from each unit's constant memory.
 
 struct MaskKernel {
-  int size = 3;              // odd, >= 3
+  int size = 3;              // odd, in [3, kMaxMask]
   std::vector<int> weights;  // size x size, row-major: weights[(dy + h) * size + dx + h] is
                              // the weight of the position (dx, dy) away from the centre
   int at(int dx, int dy) const { return weights[(dy + size / 2) * size + dx + size / 2]; }

@@ -17,8 +17,10 @@ struct ThinLens {
 
 // Seed 002 §28.5.3: blur radii at the near and far ends, falling linearly to zero across
 // [near_start, near_end] and rising across [far_start, far_end]; distances in metres. A
-// degenerate region (end not beyond start, or a zero radius) has no blur, so artists can blur
-// only the foreground or only the background.
+// region with a zero radius has no blur, so artists can blur only the foreground or only the
+// background; a region with a radius needs end beyond start (validate() refuses an empty or
+// reversed one, which would blur nothing). coc_artist_curve(distance, curve) alone does not
+// validate: a degenerate region there gives no blur.
 struct ArtistCurve {
   float near_start_m = 0.f, near_end_m = 0.f;
   float far_start_m = 0.f, far_end_m = 0.f;

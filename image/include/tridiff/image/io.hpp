@@ -2,6 +2,7 @@
 // distance, and outputs written whole or not at all.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -29,11 +30,19 @@ struct ColorImage {
   ColorEncoding encoding;        // what the file held (never Auto)
 };
 
+// The most pixels a file may declare before reading it is refused: a 16384 x 16384 image.
+// Checked against the header before any pixel is allocated (a 100-byte PNG can declare a
+// gigapixel image); a caller with the memory raises it per call.
+inline constexpr std::int64_t kDefaultMaxPixels = std::int64_t(1) << 28;
+
 // Reads the colour channels of `path` (R, G, B[, A]; a one-channel file is grey and is
 // expanded to RGB) and converts them to linear light. Every value read is finite: a NaN or an
 // infinity in the file (only half and float data can hold one) is an ImageIoError naming the
-// file, the pixel and the channel.
-ColorImage read_color(const std::string& path, ColorEncoding encoding = ColorEncoding::Auto);
+// file, the pixel and the channel. A file of more than `max_pixels` pixels, a damaged or
+// truncated file (also one whose reader fills the missing part with black) and a file too
+// large for the memory are ImageIoErrors naming it.
+ColorImage read_color(const std::string& path, ColorEncoding encoding = ColorEncoding::Auto,
+                      std::int64_t max_pixels = kDefaultMaxPixels);
 
 // How the values of a depth channel map to distance from the camera.
 enum class DepthConvention {
@@ -49,23 +58,29 @@ struct DepthOptions {
                         // pixel); any other file is an error listing its channels
   DepthConvention convention = DepthConvention::Linear;
   float near_plane = 0.f, far_plane = 0.f;  // for Normalized
+  std::int64_t max_pixels = kDefaultMaxPixels;  // as for read_color
 };
 
 // Reads one channel of `path` as linear distance (one-channel image). Every value must be
 // finite and positive after conversion, and a Normalized value must lie in [0, 1]; otherwise
-// the error names the file, channel and pixel.
+// the error names the file, channel and pixel. Limits and damage as for read_color.
 Image read_depth(const std::string& path, const DepthOptions& options = {});
 
-// Writes `image` (linear light) to `path`, format from the extension (.png .jpg .tif .exr
-// ...). Integer formats are sRGB-encoded and quantised unless `encoding` is Linear; float
-// formats (.exr, .hdr, .pfm) keep linear values. Writes to a temporary file in the same folder
-// and renames it over `path`: the file is whole or absent.
+// The bytes of `image` (linear light) encoded in the format of `path`'s extension (.png .jpg
+// .tif .exr ...); nothing is written. Integer formats are sRGB-encoded and quantised unless
+// `encoding` is Linear; float formats (.exr, .hdr) keep linear values.
+std::vector<unsigned char> encode_image(const std::string& path, const Image& image,
+                                        ColorEncoding encoding = ColorEncoding::Auto);
+
+// encode_image, then the file written as an OutputFiles set of one (output_files.hpp): whole
+// or not at all, a full disk an error, and never over a folder or a special file.
 void write_image(const std::string& path, const Image& image,
                  ColorEncoding encoding = ColorEncoding::Auto);
 
-// Refuses (ImageIoError naming the file) a path write_image cannot write whatever the image:
-// no extension, a format OpenImageIO has no writer for, a folder, a folder that does not
-// exist. Touches nothing on disk: a program checks its outputs with it before long work.
+// Refuses (ImageIoError naming the file) a path whose format encode_image cannot write
+// whatever the image: no extension, a format OpenImageIO has no writer for or cannot encode
+// into memory. Touches nothing on disk: a program checks its outputs with it (and the file
+// system side with OutputFiles::claim) before long work.
 void check_image_path(const std::string& path);
 
 // Channel names of `path` (for error messages and --help listings).

@@ -49,18 +49,24 @@ class InvalidArgument : public Error {
 
 // The numbers broke down: a zero or vanishing pivot (the system is singular to working
 // precision), an overflow, or a system the chosen method cannot solve safely.
+// `system()` and `row()` are -1 when the fault is not tied to one; what() then omits them.
 class NumericalError : public Error {
  public:
   NumericalError(std::ptrdiff_t system, std::ptrdiff_t row, const std::string& message)
-      : Error("tridiff: system " + std::to_string(system) + ", row " + std::to_string(row) +
-              ": " + message),
-        system_(system),
-        row_(row) {}
+      : Error(compose(system, row, message)), system_(system), row_(row) {}
 
   std::ptrdiff_t system() const noexcept { return system_; }
   std::ptrdiff_t row() const noexcept { return row_; }
 
  private:
+  static std::string compose(std::ptrdiff_t system, std::ptrdiff_t row,
+                             const std::string& message) {
+    std::string where;
+    if (system >= 0) where = "system " + std::to_string(system);
+    if (row >= 0) where += (where.empty() ? "row " : ", row ") + std::to_string(row);
+    return "tridiff: " + (where.empty() ? std::string() : where + ": ") + message;
+  }
+
   std::ptrdiff_t system_;
   std::ptrdiff_t row_;
 };

@@ -60,6 +60,17 @@ struct FramePlan {
 FramePlan plan_frame(std::ptrdiff_t width, std::ptrdiff_t height, int mask, int parts,
                      std::ptrdiff_t register_size = 0);
 
+// What running `plan` through the clocked model costs this computer, known before the run (a
+// budget for callers: the model's work grows with the mask's square). unit_steps: the units
+// run against each pixel at the centre (pixels x mask^2, the model's inner loop; the clocks
+// of padding skip it); register_bytes: the registers of the parts that run at once on
+// `threads` threads (0: all cores).
+struct ModelCost {
+  double unit_steps = 0;
+  double register_bytes = 0;
+};
+ModelCost model_cost(const FramePlan& plan, int threads = 0);
+
 // What a run spent, counted by the clocked model.
 struct RunCounts {
   FramePlan plan;
