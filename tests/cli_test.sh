@@ -23,6 +23,17 @@ run() {
   rm -f "$work/stderr.txt"
 }
 
+# run_file_limited KIB ARGS...: run, with files limited to KIB KiB (a write past the limit
+# fails as it would on a full disk).
+run_file_limited() {
+  local kib=$1
+  shift
+  out=$( (ulimit -f "$kib" && exec "$tridiff" "$@") 2>"$work/stderr.txt")
+  status=$?
+  err=$(cat "$work/stderr.txt")
+  rm -f "$work/stderr.txt"
+}
+
 expect_status() {  # expect_status WANT DESCRIPTION  (WANT: 0 or "nonzero")
   if [[ $1 == 0 && $status -ne 0 ]]; then
     fail "$2: exit $status, expected 0; stderr: $err"
@@ -361,22 +372,13 @@ hostile)
   rm -f "$d"/*
 
   # A failed write, as a full disk fails it: here the file-size limit (no privileges needed).
-  for output in big.png big.jpg big.exr big.tif; do
-    (ulimit -f 4 && exec "$tridiff" dof --width 160 --height 90 -o "$d/$output") \
-      >/dev/null 2>"$work/stderr.txt"
-    status=$?
-    err=$(cat "$work/stderr.txt")
-    expect_status nonzero "$output past the file-size limit"
-    expect_in "$err" "--output '$d/$output': cannot write (File too large)" "$output past the limit"
+  for command in dof:big.png dof:big.jpg dof:big.exr dof:big.tif ipf:ipf.png; do
+    output=${command#*:}
+    run_file_limited 4 "${command%%:*}" --width 160 --height 90 -o "$d/$output"
+    expect_status nonzero "$command past the file-size limit"
+    expect_in "$err" "--output '$d/$output': cannot write (File too large)" "$command past the limit"
     expect_only_files "$d"
   done
-  (ulimit -f 4 && exec "$tridiff" ipf --width 160 --height 90 --mask 3 -o "$d/ipf.png") \
-    >/dev/null 2>"$work/stderr.txt"
-  status=$?
-  err=$(cat "$work/stderr.txt")
-  expect_status nonzero "ipf past the file-size limit"
-  expect_in "$err" "cannot write (File too large)" "ipf past the file-size limit"
-  expect_only_files "$d"
   # A disk really full, where this runs as root and may mount a small tmpfs.
   mkdir -p "$work/full"
   if [[ $(id -u) == 0 ]] && mount -t tmpfs -o size=12k tmpfs "$work/full" 2>/dev/null; then

@@ -35,19 +35,8 @@ std::string message_of(const std::function<void()>& action) {
   return {};
 }
 
-class OutputFilesTest : public ::testing::Test {
+class OutputFilesTest : public ScratchFolderTest {
  protected:
-  void SetUp() override {
-    const std::string name = ::testing::UnitTest::GetInstance()->current_test_info()->name();
-    folder_ = fs::temp_directory_path() /
-              ("tridiff_output_files_" + std::to_string(::getpid()) + "_" + name);
-    fs::remove_all(folder_);
-    fs::create_directories(folder_);
-  }
-  void TearDown() override { fs::remove_all(folder_); }
-
-  std::string file(const std::string& name) const { return (folder_ / name).string(); }
-
   void put(const std::string& name, const std::string& text) const {
     std::ofstream(file(name), std::ios::binary) << text;
   }
@@ -55,14 +44,6 @@ class OutputFilesTest : public ::testing::Test {
     std::ifstream in(file(name), std::ios::binary);
     return {std::istreambuf_iterator<char>(in), {}};
   }
-  std::set<std::string> listing() const {
-    std::set<std::string> names;
-    for (const auto& entry : fs::directory_iterator(folder_))
-      names.insert(entry.path().filename().string());
-    return names;
-  }
-
-  fs::path folder_;
 };
 
 TEST_F(OutputFilesTest, WritesAndReplacesWholeKeepingPermissions) {

@@ -11,11 +11,41 @@
 #include <cstdint>
 #include <functional>
 #include <random>
+#include <filesystem>
+#include <set>
 #include <string>
+
+#include <unistd.h>
 
 #include "tridiff/image/image.hpp"
 
 namespace tridiff::testing_util {
+
+// A fixture whose every test gets a scratch folder of its own, removed afterwards.
+class ScratchFolderTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* test = ::testing::UnitTest::GetInstance()->current_test_info();
+    folder_ = std::filesystem::temp_directory_path() /
+              ("tridiff_" + std::string(test->test_suite_name()) + "_" +
+               std::to_string(::getpid()) + "_" + test->name());
+    std::filesystem::remove_all(folder_);
+    std::filesystem::create_directories(folder_);
+  }
+  void TearDown() override { std::filesystem::remove_all(folder_); }
+
+  std::string file(const std::string& name) const { return (folder_ / name).string(); }
+
+  // The names of the entries of the scratch folder.
+  std::set<std::string> listing() const {
+    std::set<std::string> names;
+    for (const auto& entry : std::filesystem::directory_iterator(folder_))
+      names.insert(entry.path().filename().string());
+    return names;
+  }
+
+  std::filesystem::path folder_;
+};
 
 // Passes when `text` contains `part`, printing the whole text otherwise.
 inline ::testing::AssertionResult contains(const std::string& text, const std::string& part) {
