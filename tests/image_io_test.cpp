@@ -737,6 +737,20 @@ TEST(ImageIoLimits, DefaultLimitIsA16KSquare) {
   EXPECT_EQ(kDefaultMaxPixels, std::int64_t(16384) * 16384);
 }
 
+// OpenEXR allocates a header attribute at its declared size before reading it: 40 bytes
+// declaring a 2 GB string are refused before OpenImageIO sees them (found by fuzzing).
+TEST_F(ImageIo, ExrHeaderDeclaringMoreThanTheFileHoldsIsRefused) {
+  std::string bytes("\x76\x2f\x31\x01\x02\x00\x00\x00", 8);  // magic, version 2, one part
+  bytes += std::string("comment\0string\0", 15) + std::string("\xf0\xff\xff\x7f", 4) + "abc";
+  std::ofstream(file("bomb.exr"), std::ios::binary) << bytes;
+  EXPECT_TRUE(contains(message_of([&] { read_color(file("bomb.exr")); }),
+                       "bomb.exr: is damaged: its header's attribute 'comment' declares "
+                       "2147483632 bytes, more than the 3 left in the file"));
+  // A whole file of ours passes the same check.
+  write_image(file("fine.exr"), random_image(5, 4, 3, 0.f, 1.f, 12));
+  EXPECT_NO_THROW(read_color(file("fine.exr")));
+}
+
 // TIFF's reader returns success with the missing strips left black and the failure only in
 // its error log (OpenImageIO 2.4): every cut must still be an error naming the file.
 TEST_F(ImageIo, TruncatedTiffIsRefusedWhereverItIsCut) {

@@ -351,6 +351,7 @@ TYPED_TEST(SolverErrors, OutputExactlyAliasingRhsIsAccepted) {
 
 TYPED_TEST(SolverErrors, SelfOverlappingLayoutIsRejected) {
   using T = TypeParam;
+  constexpr std::ptrdiff_t kHuge = std::numeric_limits<std::ptrdiff_t>::max();
   std::vector<T> v(256, T(1));
   struct Case {
     BatchLayout layout;
@@ -364,6 +365,11 @@ TYPED_TEST(SolverErrors, SelfOverlappingLayoutIsRejected) {
       {BatchLayout{10, 3, 1, 0}, "system_stride"},
       {BatchLayout{10, 3, -1, 10}, "row_stride"},         // negative strides
       {BatchLayout{10, 3, 1, -10}, "system_stride"},
+      // Sizes whose overlap test would overflow (found by fuzz_solver_args: signed overflow,
+      // undefined behaviour that UBSan reports): refused for their extent first.
+      {BatchLayout{kHuge, kHuge, kHuge, kHuge}, "layout"},
+      {BatchLayout{kHuge, 2, 1, 3}, "layout"},
+      {BatchLayout{2, kHuge, kHuge / 2, 1}, "layout"},
   };
   for (const Case& k : cases) {
     SCOPED_TRACE(::testing::Message() << "n " << k.layout.n << " count " << k.layout.count

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
+#include <fstream>
 #include <limits>
 #include <optional>
 #include <sstream>
@@ -105,12 +106,63 @@ auto with_memory_named(const std::string& path, Body&& body) {
 // ---------------------------------------------------------------------------------------------
 // Reading
 
+// Reads a NUL-terminated name of at most 255 characters; false at the end of the file or on a
+// longer name (damage the reader itself reports).
+bool read_name(std::ifstream& in, std::string& name) {
+  name.clear();
+  for (char c; in.get(c);) {
+    if (c == '\0') return true;
+    if (name.size() == 255) return false;
+    name += c;
+  }
+  return false;
+}
+
+// OpenEXR allocates each header attribute at the size the file declares before reading it, so
+// a few bytes can ask for gigabytes (found by fuzz_image_read). An attribute larger than the
+// rest of the file can only be damage: refused here, reading no more than the header's names
+// and sizes. Files that are not OpenEXR, or that end inside the header, are left to the reader.
+void check_exr_header(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  unsigned char start[8];
+  if (!in.read(reinterpret_cast<char*>(start), sizeof start)) return;
+  if (start[0] != 0x76 || start[1] != 0x2f || start[2] != 0x31 || start[3] != 0x01) return;
+  const bool multipart = (start[5] & 0x10) != 0;  // bit 12 of the version field
+  in.seekg(0, std::ios::end);
+  const std::int64_t size = in.tellg();
+  in.seekg(sizeof start);
+  std::string name, type;
+  for (int header = 0;; ++header) {
+    for (int attribute = 0;; ++attribute) {
+      if (!read_name(in, name)) return;
+      if (name.empty()) {
+        // An empty header ends the list of a multi-part file; one header is all of the other.
+        if (!multipart || attribute == 0) return;
+        break;
+      }
+      unsigned char length_bytes[4];
+      if (!read_name(in, type) || !in.read(reinterpret_cast<char*>(length_bytes), 4)) return;
+      const std::int64_t length = std::int32_t(std::uint32_t(length_bytes[0]) |
+                                               std::uint32_t(length_bytes[1]) << 8 |
+                                               std::uint32_t(length_bytes[2]) << 16 |
+                                               std::uint32_t(length_bytes[3]) << 24);
+      const std::int64_t left = size - std::int64_t(in.tellg());
+      if (length < 0 || length > left)
+        fail(path, "is damaged: its header's attribute " + quote(name) + " declares " +
+                       std::to_string(length) + " bytes, more than the " + std::to_string(left) +
+                       " left in the file");
+      in.seekg(length, std::ios::cur);
+    }
+  }
+}
+
 std::unique_ptr<OIIO::ImageInput> open_input(const std::string& path, std::int64_t max_pixels) {
   std::error_code error;
   const fs::file_status status = fs::status(path, error);
   if (status.type() == fs::file_type::not_found) fail(path, "file not found");
   if (error) fail(path, "cannot access (" + error.message() + ")");
   if (fs::is_directory(status)) fail(path, "is a folder, not an image file");
+  check_exr_header(path);
 
   // Keep straight (unassociated) alpha as stored: otherwise OpenImageIO multiplies PNG and TIFF
   // colour by alpha on reading, which would also change colour under zero alpha for good.

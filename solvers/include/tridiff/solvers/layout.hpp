@@ -57,6 +57,12 @@ inline void validate_layout(const BatchLayout& layout) {
   if (layout.system_stride < 1 && layout.count > 1)
     throw InvalidArgument("system_stride", -1, -1,
                           "must be positive, got " + std::to_string(layout.system_stride));
+  // First, so that the products below cannot overflow: each is at most max_extent plus a
+  // stride that is itself at most max_extent.
+  const auto max_extent = std::numeric_limits<std::ptrdiff_t>::max() / 4;
+  if ((layout.n - 1) > max_extent / std::max<std::ptrdiff_t>(layout.row_stride, 1) ||
+      (layout.count - 1) > max_extent / std::max<std::ptrdiff_t>(layout.system_stride, 1))
+    throw InvalidArgument("layout", -1, -1, "extent overflows the address space");
   if (layout.n > 1 && layout.count > 1) {
     // Injective iff the larger stride steps over the whole extent of the smaller dimension.
     const bool rows_inner = layout.row_stride <= layout.system_stride;
@@ -68,10 +74,6 @@ inline void validate_layout(const BatchLayout& layout) {
                             "systems overlap in memory: stride " + std::to_string(outer_stride) +
                                 " is smaller than " + std::to_string(inner_stride * inner_count));
   }
-  const auto max_extent = std::numeric_limits<std::ptrdiff_t>::max() / 4;
-  if ((layout.n - 1) > max_extent / std::max<std::ptrdiff_t>(layout.row_stride, 1) ||
-      (layout.count - 1) > max_extent / std::max<std::ptrdiff_t>(layout.system_stride, 1))
-    throw InvalidArgument("layout", -1, -1, "extent overflows the address space");
 }
 
 // The real type underlying a scalar: float for std::complex<float>, and so on.
