@@ -3,6 +3,7 @@
 # sudo available). Installs nothing when everything is present.
 #   bash scripts/deps.sh              # the build, tests and benchmarks
 #   bash scripts/deps.sh notebooks    # those plus the notebooks' Python (scripts/notebooks.sh)
+#   bash scripts/deps.sh fuzz         # those plus clang and libFuzzer (scripts/fuzz.sh)
 set -euo pipefail
 
 packages=(
@@ -21,10 +22,14 @@ notebook_packages=(
   python3-numpy python3-matplotlib
   python3-nbformat python3-nbclient python3-ipykernel jupyter-nbconvert
 )
+# The fuzz targets (fuzz/) need clang: libFuzzer ships in clang's runtime package, and clang's
+# -fopenmp needs LLVM's OpenMP (libomp), not GCC's.
+fuzz_packages=(clang libclang-rt-14-dev libomp-dev)
 for group in "$@"; do
   case "$group" in
     notebooks) packages+=("${notebook_packages[@]}") ;;
-    *) echo "scripts/deps.sh: unknown group '$group' (expected: notebooks)" >&2; exit 2 ;;
+    fuzz) packages+=("${fuzz_packages[@]}") ;;
+    *) echo "scripts/deps.sh: unknown group '$group' (expected: notebooks, fuzz)" >&2; exit 2 ;;
   esac
 done
 

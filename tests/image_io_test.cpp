@@ -751,6 +751,36 @@ TEST_F(ImageIo, ExrHeaderDeclaringMoreThanTheFileHoldsIsRefused) {
   EXPECT_NO_THROW(read_color(file("fine.exr")));
 }
 
+// Colour channels far apart in a file with many channels are read one by one, and right; a
+// depth file of many unnamed channels is refused rather than read whole to guess.
+TEST_F(ImageIo, ManyChannelsCostNoMemoryInProportion) {
+  const int width = 5, height = 3, n = 12;
+  std::vector<std::string> names;
+  // "N.." sorts between G and R: OpenEXR stores channels by name.
+  for (int c = 0; c < n; ++c) names.push_back(std::string("N") += std::to_string(c));
+  names[0] = "A";
+  names[1] = "B";
+  names[2] = "G";
+  names[n - 1] = "R";
+  std::vector<float> values(std::size_t(width * height * n));
+  for (std::size_t i = 0; i < values.size(); ++i) values[i] = float(i % n) / 16.f;
+  write_with_oiio(file("wide.exr"), width, height, names, OIIO::TypeDesc::FLOAT,
+                  OIIO::TypeDesc::FLOAT, values.data());
+  const Image color = read_color(file("wide.exr")).pixels;
+  ASSERT_EQ(color.channels(), 4);
+  EXPECT_EQ(color(4, 2, 0), float(n - 1) / 16.f);  // R, the last channel
+  EXPECT_EQ(color(4, 2, 1), 2.f / 16.f);           // G
+  EXPECT_EQ(color(4, 2, 2), 1.f / 16.f);           // B
+  EXPECT_EQ(color(4, 2, 3), 0.f);                  // A
+  std::vector<std::string> unnamed;
+  for (int c = 0; c < 5; ++c) unnamed.push_back("c" + std::to_string(c));
+  std::vector<float> grey(std::size_t(width * height * 5), 2.f);
+  write_with_oiio(file("five.exr"), width, height, unnamed, OIIO::TypeDesc::FLOAT,
+                  OIIO::TypeDesc::FLOAT, grey.data());
+  EXPECT_TRUE(contains(message_of([&] { read_depth(file("five.exr")); }),
+                       "cannot tell which channel holds depth"));
+}
+
 // TIFF's reader returns success with the missing strips left black and the failure only in
 // its error log (OpenImageIO 2.4): every cut must still be an error naming the file.
 TEST_F(ImageIo, TruncatedTiffIsRefusedWhereverItIsCut) {

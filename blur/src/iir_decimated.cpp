@@ -39,6 +39,32 @@ constexpr int kLanes = kVectorLanes;
 using Vec = FloatVector;
 using Index = int __attribute__((vector_size(kLanes * sizeof(int))));  // permutations of a Vec
 
+// v[mask[l]] in lane l, and the same over the 2 kLanes lanes of a then b: GCC's
+// __builtin_shuffle. Clang (the fuzzing build) has no form taking a mask known only at run
+// time, so it gets the same permutation lane by lane.
+inline Vec permute(Vec v, Index mask) {
+#if defined(__clang__)
+  Vec result;
+  for (int l = 0; l < kLanes; ++l) result[l] = v[mask[l] & (kLanes - 1)];
+  return result;
+#else
+  return __builtin_shuffle(v, mask);
+#endif
+}
+
+inline Vec permute(Vec a, Vec b, Index mask) {
+#if defined(__clang__)
+  Vec result;
+  for (int l = 0; l < kLanes; ++l) {
+    const int i = mask[l] & (2 * kLanes - 1);
+    result[l] = i < kLanes ? a[i] : b[i - kLanes];
+  }
+  return result;
+#else
+  return __builtin_shuffle(a, b, mask);
+#endif
+}
+
 constexpr std::ptrdiff_t kMargin = 2;  // coarse samples kept beyond each end of a level
 constexpr int kMaxLevels = 4;          // f <= 16
 // Scratch slots of the calling thread for the coarse planes (run_iir_deriche, called in between,
@@ -90,8 +116,8 @@ void decimate(ConstPlane in, Plane out, int threads) {
       std::fill(row + w, padded + padded_length, row[w - 1]);
       for (std::ptrdiff_t i = 0; i < pairs; i += kLanes) {
         const Vec a = load(padded + 2 * i), b = load(padded + 2 * i + kLanes);
-        store(even + i, __builtin_shuffle(a, b, evens));
-        store(odd + i, __builtin_shuffle(a, b, odds));
+        store(even + i, permute(a, b, evens));
+        store(odd + i, permute(a, b, odds));
       }
       // Sample i reads positions 2 i - kPad + {0 .. 4}: even[i], odd[i], even[i + 1],
       // odd[i + 1], even[i + 2].
@@ -157,8 +183,8 @@ void upsample(ConstPlane coarse, Plane out, const Upsampling& up, int threads) {
       float* dst = out.row(y);
       for (std::ptrdiff_t x0 = 0; x0 < w; x0 += kLanes) {
         const Vec samples = load(line + up.sample(x0) - 1);
-        Vec sum = weight[0] * __builtin_shuffle(samples, gather[0]);
-        for (int t = 1; t < 4; ++t) sum += weight[t] * __builtin_shuffle(samples, gather[t]);
+        Vec sum = weight[0] * permute(samples, gather[0]);
+        for (int t = 1; t < 4; ++t) sum += weight[t] * permute(samples, gather[t]);
         if (x0 + kLanes <= w) {
           store(dst + x0, sum);
         } else {

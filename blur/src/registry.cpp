@@ -30,7 +30,6 @@ void run_pyramid_quasi(ConstPlane, Plane, const BlurSettings&);
 
 namespace {
 
-constexpr double kInf = INFINITY;
 constexpr BorderSet kReplicateZero{Border::replicate, Border::zero};
 constexpr BorderSet kAllBorders{Border::replicate, Border::mirror, Border::zero,
                                  Border::periodic};

@@ -344,12 +344,19 @@ struct DepthValues {
   int stride, offset;
 };
 
+constexpr int kMaxGreyChannels = 4;
+
 DepthValues read_depth_values(OIIO::ImageInput& input, const std::string& path,
                               const std::string& wanted) {
   const OIIO::ImageSpec& spec = input.spec();
   if (const int channel = named_depth_channel(path, spec, wanted); channel >= 0)
     return {channel, read_interleaved(input, path, channel, channel + 1), 1, 0};
-  // Only the pixels can tell whether the file is grey: read every channel, once.
+  // Only the pixels can tell whether the file is grey: read every channel, once. A grey image
+  // stored as colour has at most four (RGBA); more would cost memory in proportion for a
+  // guess (1024 channels of a 512 x 512 file: 1 GiB).
+  if (spec.nchannels > kMaxGreyChannels)
+    fail(path, "cannot tell which channel holds depth: none is named Z or depth " +
+                   channel_list(spec) + "; choose one with --depth-channel NAME");
   std::vector<float> pixels = read_interleaved(input, path, 0, spec.nchannels);
   const int channel = grey_channel(path, spec, pixels);
   return {channel, std::move(pixels), spec.nchannels, channel};
@@ -591,13 +598,20 @@ ColorImage read_color_image(const std::string& path, ColorEncoding encoding,
   int first = std::min({chosen.rgb[0], chosen.rgb[1], chosen.rgb[2]});
   int last = std::max({chosen.rgb[0], chosen.rgb[1], chosen.rgb[2]});
   if (chosen.alpha >= 0) first = std::min(first, chosen.alpha), last = std::max(last, chosen.alpha);
-  const std::vector<float> pixels = read_interleaved(*input, path, first, last + 1);
-
+  // A span of other channels between them (an EXR's layers sort between A and R) would cost
+  // memory for nothing: beyond four, each channel is read on its own.
   const int stride = last + 1 - first;
+  const bool one_read = stride <= 4;
+  const std::vector<float> pixels =
+      one_read ? read_interleaved(*input, path, first, last + 1) : std::vector<float>{};
   Image image(spec.width, spec.height, chosen.alpha >= 0 ? 4 : 3);
   const auto copy = [&](int channel, int plane) {
-    deinterleave_finite(pixels, stride, channel - first, image.plane(plane), path,
-                        spec.channelnames[channel]);
+    const std::string& name = spec.channelnames[channel];
+    if (one_read)
+      deinterleave_finite(pixels, stride, channel - first, image.plane(plane), path, name);
+    else
+      deinterleave_finite(read_interleaved(*input, path, channel, channel + 1), 1, 0,
+                          image.plane(plane), path, name);
   };
   for (int c = 0; c < 3; ++c) copy(chosen.rgb[c], c);
   if (chosen.alpha >= 0) copy(chosen.alpha, 3);
