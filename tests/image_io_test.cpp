@@ -746,6 +746,13 @@ TEST_F(ImageIo, ExrHeaderDeclaringMoreThanTheFileHoldsIsRefused) {
   EXPECT_TRUE(contains(message_of([&] { read_color(file("bomb.exr")); }),
                        "bomb.exr: is damaged: its header's attribute 'comment' declares "
                        "2147483632 bytes, more than the 3 left in the file"));
+  // A name past OpenEXR's 31 characters (no long-names flag): OpenEXR would read the rest as
+  // the type and size, ASCII as 1.9 GB (found by fuzzing).
+  std::string long_name("\x76\x2f\x31\x01\x02\x00\x00\x00", 8);
+  long_name += std::string(40, 'n') + std::string("\0string\0\x03\x00\x00\x00" "abc", 15);
+  std::ofstream(file("long.exr"), std::ios::binary) << long_name;
+  EXPECT_TRUE(contains(message_of([&] { read_color(file("long.exr")); }),
+                       "long.exr: is damaged: a header name is longer than 31 characters"));
   // A whole file of ours passes the same check.
   write_image(file("fine.exr"), random_image(5, 4, 3, 0.f, 1.f, 12));
   EXPECT_NO_THROW(read_color(file("fine.exr")));

@@ -106,13 +106,12 @@ auto with_memory_named(const std::string& path, Body&& body) {
 // ---------------------------------------------------------------------------------------------
 // Reading
 
-// Reads a NUL-terminated name of at most 255 characters; false at the end of the file or on a
-// longer name (damage the reader itself reports).
-bool read_name(std::ifstream& in, std::string& name) {
+// Reads a NUL-terminated name; false at the end of the file or past `longest` characters.
+bool read_name(std::ifstream& in, std::string& name, std::size_t longest) {
   name.clear();
   for (char c; in.get(c);) {
     if (c == '\0') return true;
-    if (name.size() == 255) return false;
+    if (name.size() == longest) return false;
     name += c;
   }
   return false;
@@ -128,20 +127,29 @@ void check_exr_header(const std::string& path) {
   if (!in.read(reinterpret_cast<char*>(start), sizeof start)) return;
   if (start[0] != 0x76 || start[1] != 0x2f || start[2] != 0x31 || start[3] != 0x01) return;
   const bool multipart = (start[5] & 0x10) != 0;  // bit 12 of the version field
+  // Names are at most 31 characters unless bit 10 allows 255. OpenEXR reads no further, so a
+  // longer name would make it take the rest as the type and size (found by fuzz_image_read:
+  // ASCII read as a 1.9 GB size): damage, refused.
+  const std::size_t longest = (start[5] & 0x04) != 0 ? 255 : 31;
   in.seekg(0, std::ios::end);
   const std::int64_t size = in.tellg();
   in.seekg(sizeof start);
   std::string name, type;
   for (int header = 0;; ++header) {
     for (int attribute = 0;; ++attribute) {
-      if (!read_name(in, name)) return;
+      if (!read_name(in, name, longest)) {
+        if (in) fail(path, "is damaged: a header name is longer than " + std::to_string(longest) +
+                               " characters");
+        return;
+      }
       if (name.empty()) {
         // An empty header ends the list of a multi-part file; one header is all of the other.
         if (!multipart || attribute == 0) return;
         break;
       }
       unsigned char length_bytes[4];
-      if (!read_name(in, type) || !in.read(reinterpret_cast<char*>(length_bytes), 4)) return;
+      if (!read_name(in, type, longest) || !in.read(reinterpret_cast<char*>(length_bytes), 4))
+        return;
       const std::int64_t length = std::int32_t(std::uint32_t(length_bytes[0]) |
                                                std::uint32_t(length_bytes[1]) << 8 |
                                                std::uint32_t(length_bytes[2]) << 16 |
