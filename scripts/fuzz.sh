@@ -188,7 +188,8 @@ replay() {
 run() {
   local target=$1 log="$build/fuzz-logs/$1.log" corpus="$root/$build/fuzz-corpus/$1"
   mkdir -p "$corpus" "fuzz/regressions/$target" "$seeds/$target"
-  local status=0
+  local status=0 saved
+  saved=$(ls "fuzz/regressions/$target" | tr '\n' ' ')  # the cases from before this run
   # New corpus entries go to the first folder; the seeds are read only.
   fuzz "$target" -max_total_time="$seconds" -print_final_stats=1 \
     -artifact_prefix="$root/fuzz/regressions/$target/" "$corpus" "$root/$seeds/$target" \
@@ -203,8 +204,10 @@ run() {
     # the bytes are there for the next guard, and CI does not fail on another library's
     # allocator. Crashes, sanitizer reports and timeouts still fail.
     mkdir -p "fuzz/upstream-oom/$target"
-    mv "fuzz/regressions/$target"/crash-* "fuzz/regressions/$target"/oom-* \
-      "fuzz/upstream-oom/$target/" 2>/dev/null || true
+    local found
+    for found in "fuzz/regressions/$target"/*; do
+      [[ " $saved " == *" $(basename "$found") "* ]] || mv "$found" "fuzz/upstream-oom/$target/"
+    done
     echo "fuzz: $target: WARNING: out of memory inside a codec after ${runs:-?} runs; input" \
          "kept in fuzz/upstream-oom/$target/ (see fuzz/README.md):"
     grep -E "out-of-memory|in Imf_|in OpenImageIO|readValueFrom|png_" "$log" | head -n 12
