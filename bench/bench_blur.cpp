@@ -61,7 +61,7 @@ const Image& test_image(std::ptrdiff_t n) {
   const char* names[] = {"edges", "discs", "texture"};
   for (int c = 0; c < 3; ++c)
     for (const TestPattern& p : set)
-      if (p.name == names[c]) copy_plane(p.image.plane(0), image.plane(c));
+      if (p.name == names[c]) copy_plane(image.plane(c), p.image.plane(0));
   return cache.emplace(n, std::move(image)).first->second;
 }
 
@@ -116,7 +116,7 @@ Border border_for(const BlurMethod& method) {
 
 ImageBlur method_blur(const BlurMethod& method) {
   return [&method](const Image& in, Image& out, double sigma, int threads) {
-    blur(method, in, out, {sigma, border_for(method), threads});
+    blur(out, in, method, {sigma, border_for(method), threads});
   };
 }
 
@@ -145,7 +145,7 @@ const Quality& quality(const std::string& name, const ImageBlur& run, double sig
   {
     const Image& big = test_image(kErrorSize);
     Image small(256, 256, 3), out(256, 256, 3);
-    for (int c = 0; c < 3; ++c) copy_plane(big.plane(c).sub({0, 0, 256, 256}), small.plane(c));
+    for (int c = 0; c < 3; ++c) copy_plane(small.plane(c), big.plane(c).sub({0, 0, 256, 256}));
     q.seconds_256 = INFINITY;
     for (int i = 0; i < 2; ++i) {  // the first call pays for thread start-up and page faults
       const auto start = std::chrono::steady_clock::now();

@@ -6,7 +6,7 @@
 //   - the limit: STREAM-like copy and triad on float arrays far larger than the caches.
 //
 // Names: BM_solvers_<method>/<scalar>/<form>/<shape>/threads:<t>/real_time, where <method> is
-// auto, thomas, cr, pcr, hybrid, pivoting or lapack_gtsv; <form> is diffusion, general, or
+// auto, thomas, cr, pcr, cr-pcr, pivoting (the library's names) or lapack_gtsv; <form> is diffusion, general, or
 // general_unchecked (Thomas without the dominance check); <shape> is <layout>:<systems>x<n>:
 // rows:4096x4096, columns:4096x4096, single:1x16777216, rows:1048576x16. For example
 //   BM_solvers_thomas/float/diffusion/columns:4096x4096/threads:2/real_time
@@ -492,18 +492,6 @@ void bm_lapack_gtsv(benchmark::State& state, Shape shape, int threads) {
 // ---------------------------------------------------------------------------------------------
 // Registration
 
-const char* name_of(Method method) {
-  switch (method) {
-    case Method::Auto: return "auto";
-    case Method::Thomas: return "thomas";
-    case Method::CyclicReduction: return "cr";
-    case Method::ParallelCyclicReduction: return "pcr";
-    case Method::Hybrid: return "hybrid";
-    case Method::Pivoting: return "pivoting";
-  }
-  return "unknown";
-}
-
 constexpr int kThreadCounts[] = {1, 2};
 
 // The cyclic reduction family solves each system serially (per-system reference code, O(n),
@@ -549,7 +537,7 @@ void register_solvers(const std::string& scalar) {
           if (form == Form::GeneralUnchecked && method != Method::Thomas) continue;
           if (shape == Shape::Single && threads > 1 && is_reduction(method)) continue;
           const std::string name =
-              join({std::string("BM_solvers_") + name_of(method), scalar, name_of(form),
+              join({std::string("BM_solvers_") + to_string(method), scalar, name_of(form),
                     name_of(shape), threads_arg(threads)});
           finish(benchmark::RegisterBenchmark(name.c_str(), bm_tridiff<T>, method, form, shape,
                                               threads));

@@ -113,7 +113,7 @@ void check_finite(const Image& image, const char* what, bool positive) {
 
 void read_as_color(const std::string& path, ColorEncoding encoding) {
   try {
-    const ColorImage color = read_color(path, encoding, kMaxPixels);
+    const ColorImage color = read_color(path, {.encoding = encoding, .max_pixels = kMaxPixels, .threads = 1});
     if (color.pixels.channels() != 3 && color.pixels.channels() != 4)
       finding("read_color returned " + std::to_string(color.pixels.channels()) + " channels");
     if (color.encoding == ColorEncoding::Auto) finding("read_color returned encoding Auto");

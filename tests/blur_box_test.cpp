@@ -90,7 +90,7 @@ void expect_box_filter_is_brute_force(const Image& image, std::ptrdiff_t rx, std
   const ConstPlane in = image.plane(0);
   const Table table(in, 2);
   Image out(in.width(), in.height(), 1);
-  sat_box_filter(table, out.plane(0), rx, ry, 2);
+  sat_box_filter(out.plane(0), table, rx, ry, 2);
   const double area = double(2 * rx + 1) * double(2 * ry + 1);
   for (std::ptrdiff_t y = 0; y < in.height(); ++y)
     for (std::ptrdiff_t x = 0; x < in.width(); ++x)
@@ -222,7 +222,7 @@ TEST(BoxMethods, MatchBruteForceReplicateOnWholeImage) {
       for (double sigma : {2.0, 3.3, 12.0}) {  // 12: boxes wider than the image
         const Image image = random_image(s.w, s.h, 13);
         Image out(s.w, s.h, 1);
-        blur(method, image.plane(0), out.plane(0), {sigma, Border::replicate, 2});
+        blur(out.plane(0), image.plane(0), method, {sigma, Border::replicate, 2});
         const DoublePlane expected = brute_passes(image.plane(0), passes_of(name, sigma));
         for (std::ptrdiff_t y = 0; y < s.h; ++y)
           for (std::ptrdiff_t x = 0; x < s.w; ++x)
@@ -237,8 +237,8 @@ TEST(BoxMethods, ThreadCountDoesNotChangeTheResult) {
   const Image image = random_image(70, 45, 17);
   for (const char* name : {"box", "box-extended", "box-sat"}) {
     Image one(70, 45, 1), two(70, 45, 1);
-    blur(find_blur_method(name), image.plane(0), one.plane(0), {4.5, Border::replicate, 1});
-    blur(find_blur_method(name), image.plane(0), two.plane(0), {4.5, Border::replicate, 2});
+    blur(one.plane(0), image.plane(0), find_blur_method(name), {4.5, Border::replicate, 1});
+    blur(two.plane(0), image.plane(0), find_blur_method(name), {4.5, Border::replicate, 2});
     for (std::ptrdiff_t y = 0; y < 45; ++y)
       for (std::ptrdiff_t x = 0; x < 70; ++x) ASSERT_EQ(one(x, y, 0), two(x, y, 0)) << name;
   }
@@ -248,7 +248,7 @@ TEST(BoxMethods, ThreadCountDoesNotChangeTheResult) {
 std::vector<double> impulse_response(const std::vector<BoxPass>& passes, std::ptrdiff_t half) {
   Image impulse(2 * half + 1, 1, 1), response(2 * half + 1, 1, 1);
   impulse(half, 0, 0) = 1;
-  box_passes(impulse.plane(0), response.plane(0), passes, 1);
+  box_passes(response.plane(0), impulse.plane(0), passes, 1);
   std::vector<double> k(2 * half + 1);
   for (std::ptrdiff_t i = 0; i <= 2 * half; ++i) k[i] = response(i, 0, 0);
   return k;
@@ -304,7 +304,7 @@ TEST(BoxKernels, ImpulseVarianceIsTheSumOfThePasses) {
 // norm of the difference of the impulse responses (both sum to 1).
 double worst_error(const std::vector<BoxPass>& passes, double sigma) {
   return 0.5 * operator_norm_error(
-                   [&](ConstPlane in, Plane out) { box_passes(in, out, passes, 2); }, sigma);
+                   [&](Plane out, ConstPlane in) { box_passes(out, in, passes, 2); }, sigma);
 }
 
 TEST(BoxExtended, LowersTheErrorOfPlainBoxesAtTheSamePassCount) {
@@ -331,10 +331,10 @@ TEST(BoxMethods, RegisteredMaxErrorHolds) {
     for (const char* name : {"box", "box-extended", "box-sat"}) {
       const BlurMethod& method = find_blur_method(name);
       if (sigma < method.min_sigma) continue;
-      const BlurSettings settings{sigma, Border::replicate, 2};
+      const BlurOptions settings{sigma, Border::replicate, 2};
       for (std::size_t i = 0; i < patterns.size(); ++i) {
         Image out(64, 64, 1);
-        blur(method, patterns[i].image.plane(0), out.plane(0), settings);
+        blur(out.plane(0), patterns[i].image.plane(0), method, settings);
         EXPECT_LE(blur_error(out.plane(0), exact[i]).max_abs, method.max_error)
             << name << " sigma " << sigma << " " << patterns[i].name;
       }
@@ -366,7 +366,7 @@ TEST(BoxMethods, EffectiveSigmaMatchesTablesA6A7) {
                         {3, 3, 1.5},   {3, 4, 1.75}};
   for (const Case& c : cases) {
     const std::vector<BoxPass> passes(c.passes, BoxPass{(c.width - 1) / 2, 0});
-    const PlaneBlur blur_plane = [&](ConstPlane in, Plane out) { box_passes(in, out, passes); };
+    const PlaneBlur blur_plane = [&](Plane out, ConstPlane in) { box_passes(out, in, passes); };
     const double found = effective_sigma(blur_plane, patterns, c.table - 1, c.table + 1);
     std::printf("w %td x %d: effective sigma %.3f, table %.3f, variance rule %.3f\n", c.width,
                 c.passes, found, c.table, std::sqrt(c.passes * box_variance(c.width)));
@@ -382,19 +382,19 @@ TEST(BoxMethods, BadArguments) {
   const Image image = random_image(8, 8, 1);
   Image small(4, 4, 1);
   const SummedAreaTable table(image.plane(0));
-  EXPECT_EQ(invalid_argument_of([&] { sat_box_filter(table, small.plane(0), 1, 1); }).argument,
+  EXPECT_EQ(invalid_argument_of([&] { sat_box_filter(small.plane(0), table, 1, 1); }).argument,
             "out");
   Image out(8, 8, 1);
-  EXPECT_EQ(invalid_argument_of([&] { sat_box_filter(table, out.plane(0), -1, 1); }).argument,
+  EXPECT_EQ(invalid_argument_of([&] { sat_box_filter(out.plane(0), table, -1, 1); }).argument,
             "radius");
   EXPECT_EQ(invalid_argument_of([&] { SummedAreaTable(image.plane(0), -1); }).argument,
             "threads");
   const std::vector<BoxPass> bad{{-1, 0}};
-  EXPECT_EQ(invalid_argument_of([&] { box_passes(image.plane(0), out.plane(0), bad); }).argument,
+  EXPECT_EQ(invalid_argument_of([&] { box_passes(out.plane(0), image.plane(0), bad); }).argument,
             "passes");
   for (const char* name : {"box", "box-extended", "box-sat"})
     EXPECT_EQ(invalid_argument_of([&] {
-                blur(find_blur_method(name), image.plane(0), out.plane(0),
+                blur(out.plane(0), image.plane(0), find_blur_method(name),
                      {4, Border::zero, 1});
               }).argument,
               "border");

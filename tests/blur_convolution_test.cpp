@@ -157,7 +157,7 @@ TEST(Kernels, BilinearBoxAveragesThePixelAndItsLowerRightNeighbours) {
   // On an image: (x, y) -> the mean of the 2 x 2 block whose top-left pixel it is.
   const Image in = random_image(5, 4, 7);
   Image out(5, 4, 1);
-  convolve_2d(in.plane(0), out.plane(0), box, Border::replicate, 1);
+  convolve_2d(out.plane(0), in.plane(0), box, Border::replicate, 1);
   for (std::ptrdiff_t y = 0; y + 1 < 4; ++y)
     for (std::ptrdiff_t x = 0; x + 1 < 5; ++x)
       EXPECT_NEAR(out(x, y, 0),
@@ -187,9 +187,9 @@ struct Size {
 };
 constexpr Size kSizes[] = {{1, 1}, {2, 2}, {3, 3}, {17, 17}, {33, 33}, {17, 5}, {3, 33}, {2, 17}};
 
-using SeparableConvolution = void (*)(ConstPlane, Plane, std::span<const float>,
+using SeparableConvolution = void (*)(Plane, ConstPlane, std::span<const float>,
                                       std::span<const float>, Border, int);
-using Convolution2D = void (*)(ConstPlane, Plane, const Kernel2D&, Border, int);
+using Convolution2D = void (*)(Plane, ConstPlane, const Kernel2D&, Border, int);
 
 // kx, ky pairs: asymmetric small ones, symmetric, one-tap, kernels wider than the image, and
 // kernels with negative weights that do not sum to 1.
@@ -211,7 +211,7 @@ void expect_matches_brute_force_separable(SeparableConvolution convolve, double 
                      std::string(border_name(border)));
         const Image in = random_image(size.w, size.h, 3);
         Image out(size.w, size.h, 1);
-        convolve(in.plane(0), out.plane(0), kx, ky, border, 1);
+        convolve(out.plane(0), in.plane(0), kx, ky, border, 1);
         EXPECT_LE(max_abs_difference(out.plane(0), brute_force_separable(in.plane(0), kx, ky, border)),
                   tolerance);
       }
@@ -232,7 +232,7 @@ void expect_matches_brute_force_2d(Convolution2D convolve, double tolerance) {
                      std::string(border_name(border)));
         const Image in = random_image(size.w, size.h, 4);
         Image out(size.w, size.h, 1);
-        convolve(in.plane(0), out.plane(0), k, border, 1);
+        convolve(out.plane(0), in.plane(0), k, border, 1);
         const DoublePlane expected = brute_force(
             in.plane(0), [&](std::ptrdiff_t i, std::ptrdiff_t j) { return double(k(i, j)); },
             k.width, k.height, border);
@@ -263,7 +263,7 @@ TEST(Convolution, AViewInsideALargerPlaneReadsAndWritesOnlyItsRectangle) {
   for (auto convolve : {SeparableConvolution(convolve_separable),
                         SeparableConvolution(fft_convolve_separable)}) {
     std::fill_n(out.data(), out.plane_stride(), -1.f);
-    convolve(in.plane(0).sub(area), out.plane(0).sub(area), kx, ky, Border::mirror, 2);
+    convolve(out.plane(0).sub(area), in.plane(0).sub(area), kx, ky, Border::mirror, 2);
     const DoublePlane expected =
         brute_force_separable(in.plane(0).sub(area), kx, ky, Border::mirror);
     EXPECT_LE(max_abs_difference(ConstPlane(out.plane(0).sub(area)), expected), 2e-6);
@@ -282,7 +282,7 @@ TEST(Convolution, SeparableSplitsWideImagesIntoPanelsSeamlessly) {
   const std::vector<float> kx = random_kernel(5, 42), ky = random_kernel(521, 43);
   Image out(600, 5, 1);
   for (Border border : {Border::replicate, Border::periodic}) {
-    convolve_separable(in.plane(0), out.plane(0), kx, ky, border, 2);
+    convolve_separable(out.plane(0), in.plane(0), kx, ky, border, 2);
     EXPECT_LE(max_abs_difference(out.plane(0), brute_force_separable(in.plane(0), kx, ky, border)),
               1e-6)
         << border_name(border);
@@ -294,9 +294,9 @@ TEST(Convolution, SeparableEqualsTwoDForASeparableKernel) {
   const Image in = random_image(33, 17, 23);
   Image a(33, 17, 1), b(33, 17, 1), c(33, 17, 1);
   for (Border border : kBorders) {
-    convolve_separable(in.plane(0), a.plane(0), kx, ky, border, 1);
-    convolve_2d(in.plane(0), b.plane(0), outer_product(kx, ky), border, 1);
-    fft_convolve(in.plane(0), c.plane(0), outer_product(kx, ky), border, 1);
+    convolve_separable(a.plane(0), in.plane(0), kx, ky, border, 1);
+    convolve_2d(b.plane(0), in.plane(0), outer_product(kx, ky), border, 1);
+    fft_convolve(c.plane(0), in.plane(0), outer_product(kx, ky), border, 1);
     EXPECT_LE(max_abs_difference(a.plane(0), b.plane(0)), 1e-6) << border_name(border);
     EXPECT_LE(max_abs_difference(a.plane(0), c.plane(0)), 2e-6) << border_name(border);
   }
@@ -312,19 +312,19 @@ TEST(Convolution, OneAndTwoThreadsGiveTheSameResult) {
     // whatever rows the stripes of 2 and 3 threads start on.
     // (A symmetric column kernel takes the two-rows-at-a-time path, an asymmetric one not.)
     for (const auto& [row_kernel, column_kernel] : {std::pair{kx, ky}, std::pair{ky, kx}}) {
-      convolve_separable(in.plane(0), one.plane(0), row_kernel, column_kernel, border, 1);
+      convolve_separable(one.plane(0), in.plane(0), row_kernel, column_kernel, border, 1);
       for (int threads : {2, 3}) {
-        convolve_separable(in.plane(0), two.plane(0), row_kernel, column_kernel, border,
+        convolve_separable(two.plane(0), in.plane(0), row_kernel, column_kernel, border,
                            threads);
         EXPECT_EQ(max_abs_difference(one.plane(0), two.plane(0)), 0.0) << threads << " threads";
       }
     }
-    convolve_2d(in.plane(0), one.plane(0), outer_product(kx, ky), border, 1);
-    convolve_2d(in.plane(0), two.plane(0), outer_product(kx, ky), border, 2);
+    convolve_2d(one.plane(0), in.plane(0), outer_product(kx, ky), border, 1);
+    convolve_2d(two.plane(0), in.plane(0), outer_product(kx, ky), border, 2);
     EXPECT_EQ(max_abs_difference(one.plane(0), two.plane(0)), 0.0);
     // FFTW may split the transform differently: equal up to rounding.
-    fft_convolve_separable(in.plane(0), one.plane(0), kx, ky, border, 1);
-    fft_convolve_separable(in.plane(0), two.plane(0), kx, ky, border, 2);
+    fft_convolve_separable(one.plane(0), in.plane(0), kx, ky, border, 1);
+    fft_convolve_separable(two.plane(0), in.plane(0), kx, ky, border, 2);
     EXPECT_LE(max_abs_difference(one.plane(0), two.plane(0)), 1e-6);
   }
 }
@@ -340,7 +340,7 @@ TEST(Convolution, BadKernelsAndPlanesAreInvalidArgumentsNamingTheArgument) {
   for (auto convolve : {SeparableConvolution(convolve_separable),
                         SeparableConvolution(fft_convolve_separable)}) {
     auto run = [&](std::span<const float> kx, std::span<const float> ky, Plane o, int threads) {
-      return invalid_argument_of([&] { convolve(in.plane(0), o, kx, ky, Border::zero, threads); });
+      return invalid_argument_of([&] { convolve(o, in.plane(0), kx, ky, Border::zero, threads); });
     };
     auto t = run(even, good, out.plane(0), 1);
     EXPECT_EQ(t.argument, "kx");
@@ -358,20 +358,20 @@ TEST(Convolution, BadKernelsAndPlanesAreInvalidArgumentsNamingTheArgument) {
               }).argument,
               "out");
     EXPECT_EQ(invalid_argument_of([&] {
-                convolve(ConstPlane{}, out.plane(0), good, good, Border::zero, 1);
+                convolve(out.plane(0), ConstPlane{}, good, good, Border::zero, 1);
               }).argument,
               "in");
   }
   for (auto convolve : {Convolution2D(convolve_2d), Convolution2D(fft_convolve)}) {
     auto run = [&](const Kernel2D& k) {
-      return invalid_argument_of([&] { convolve(in.plane(0), out.plane(0), k, Border::mirror, 1); });
+      return invalid_argument_of([&] { convolve(out.plane(0), in.plane(0), k, Border::mirror, 1); });
     };
     EXPECT_EQ(run(even2d).argument, "kernel");
     EXPECT_TRUE(contains(run(even2d).message, "odd"));
     EXPECT_EQ(run(empty2d).argument, "kernel");
     EXPECT_EQ(run(short2d).argument, "kernel");
     EXPECT_EQ(invalid_argument_of([&] {
-                convolve(in.plane(0), small.plane(0), good2d, Border::mirror, 1);
+                convolve(small.plane(0), in.plane(0), good2d, Border::mirror, 1);
               }).argument,
               "out");
   }
@@ -391,7 +391,7 @@ double method_error(const BlurMethod& method, double sigma, Border border, std::
   double worst = 0;
   for (const TestPattern& pattern : quality_test_set(size, 5)) {
     Image out;
-    blur(method, pattern.image, out, {sigma, border, 1});
+    blur(out, pattern.image, method, {sigma, border, 1});
     const DoublePlane exact = reference_gaussian(pattern.image.plane(0), sigma, border, 1);
     worst = std::max(worst, max_abs_difference(out.plane(0), exact));
   }
@@ -453,7 +453,7 @@ TEST(GaussianFir, EqualsTheSameTruncatedKernelAppliedByBruteForce) {
       for (std::ptrdiff_t h : {1, 2, 15, 16, 17, 31, 33}) {
         const Image in = random_image(w, h, static_cast<unsigned>(w * 100 + h));
         Image out(w, h, 1);
-        blur(method, in.plane(0), out.plane(0), {sigma, Border::replicate, 2});
+        blur(out.plane(0), in.plane(0), method, {sigma, Border::replicate, 2});
         const DoublePlane exact = brute_force_separable(in.plane(0), k, k, Border::replicate);
         EXPECT_LE(max_abs_difference(out.plane(0), exact), 2e-6)
             << "sigma " << sigma << ", " << w << " x " << h;
@@ -468,8 +468,8 @@ TEST(GaussianFir, AViewInsideALargerPlaneAndThreadsAgree) {
   const Image in = random_image(61, 50, 3);
   const ConstPlane view = in.plane(0).sub({5, 3, 43, 41});
   Image one(61, 50, 1), two(61, 50, 1);
-  blur(method, view, one.plane(0).sub({5, 3, 43, 41}), {2.0, Border::replicate, 1});
-  blur(method, view, two.plane(0).sub({5, 3, 43, 41}), {2.0, Border::replicate, 2});
+  blur(one.plane(0).sub({5, 3, 43, 41}), view, method, {2.0, Border::replicate, 1});
+  blur(two.plane(0).sub({5, 3, 43, 41}), view, method, {2.0, Border::replicate, 2});
   for (std::ptrdiff_t y = 0; y < 50; ++y)
     for (std::ptrdiff_t x = 0; x < 61; ++x) {
       ASSERT_EQ(one(x, y, 0), two(x, y, 0)) << x << ", " << y;
@@ -480,7 +480,7 @@ TEST(GaussianFir, AViewInsideALargerPlaneAndThreadsAgree) {
     }
   const Image flat = testing_util::make_image(37, 21, 1, [](auto, auto, int) { return 0.625f; });
   Image out(37, 21, 1);
-  blur(method, flat.plane(0), out.plane(0), {2.5});
+  blur(out.plane(0), flat.plane(0), method, {2.5});
   for (std::ptrdiff_t y = 0; y < 21; ++y)
     for (std::ptrdiff_t x = 0; x < 37; ++x) ASSERT_NEAR(out(x, y, 0), 0.625f, 1e-6);
 }
@@ -488,11 +488,11 @@ TEST(GaussianFir, AViewInsideALargerPlaneAndThreadsAgree) {
 TEST(Methods, SigmaOutsideTheRangeIsRejected) {
   Image in(8, 8, 1), out(8, 8, 1);
   EXPECT_EQ(invalid_argument_of([&] {
-              blur(find_blur_method("direct"), in.plane(0), out.plane(0), {17.0});
+              blur(out.plane(0), in.plane(0), find_blur_method("direct"), {17.0});
             }).argument,
             "sigma");
   EXPECT_EQ(invalid_argument_of([&] {
-              blur(find_blur_method("fft"), in.plane(0), out.plane(0), {0.1});
+              blur(out.plane(0), in.plane(0), find_blur_method("fft"), {0.1});
             }).argument,
             "sigma");
 }

@@ -46,7 +46,7 @@ constexpr SeedTable kSeedTables[] = {
 double seed_tolerance(double seed_sigma) { return 0.125 + 0.03 * seed_sigma; }
 
 PlaneBlur levels_blur(PyramidFilter filter, int levels) {
-  return [filter, levels](ConstPlane in, Plane out) { pyramid_blur(in, out, filter, levels); };
+  return [filter, levels](Plane out, ConstPlane in) { pyramid_blur(out, in, filter, levels); };
 }
 
 double measured_sigma(PyramidFilter filter, int levels, std::ptrdiff_t size) {
@@ -111,7 +111,7 @@ Moments impulse_moments(PyramidFilter filter, int levels, std::ptrdiff_t n, std:
   const std::ptrdiff_t w = along_rows ? n : 1, h = along_rows ? 1 : n;
   Image in(w, h, 1), out(w, h, 1);
   in.plane(0).data()[along_rows ? at : at * in.pitch()] = 1;
-  pyramid_blur(in.plane(0), out.plane(0), filter, levels);
+  pyramid_blur(out.plane(0), in.plane(0), filter, levels);
   Moments m;
   for (std::ptrdiff_t i = 0; i < n; ++i) {
     const double v = along_rows ? out(i, 0, 0) : out(0, i, 0);
@@ -163,7 +163,7 @@ TEST(BlurPyramid, ConstantImageStaysConstant) {
       for (int levels : {1, 3, 7}) {
         const Image in = make_image(s.w, s.h, 1, [](auto, auto, int) { return 0.3721f; });
         Image out(s.w, s.h, 1);
-        pyramid_blur(in.plane(0), out.plane(0), filter, levels, 0.8, Border::replicate, 0);
+        pyramid_blur(out.plane(0), in.plane(0), filter, levels, 0.8, Border::replicate, 0);
         for (std::ptrdiff_t y = 0; y < s.h; ++y)
           for (std::ptrdiff_t x = 0; x < s.w; ++x)
             ASSERT_NEAR(out(x, y, 0), 0.3721f, 1e-6)
@@ -181,7 +181,7 @@ TEST(BlurPyramid, AnySizeGivesFiniteValuesWithinInputRange) {
           for (std::ptrdiff_t x = 0; x < s.w; ++x)
             lo = std::min(lo, in(x, y, 0)), hi = std::max(hi, in(x, y, 0));
         Image out(s.w, s.h, 1);
-        pyramid_blur(in.plane(0), out.plane(0), filter, levels, 0.5, Border::replicate, 0);
+        pyramid_blur(out.plane(0), in.plane(0), filter, levels, 0.5, Border::replicate, 0);
         for (std::ptrdiff_t y = 0; y < s.h; ++y)
           for (std::ptrdiff_t x = 0; x < s.w; ++x) {
             const float v = out(x, y, 0);
@@ -201,7 +201,7 @@ TEST(BlurPyramid, BordersAreExactlyTheReplicateExtension) {
   for (PyramidFilter filter : kFilters)
     for (int levels : {1, 3}) {
       Image out(w, h, 1);
-      pyramid_blur(in.plane(0), out.plane(0), filter, levels, 0.9, Border::replicate, 0);
+      pyramid_blur(out.plane(0), in.plane(0), filter, levels, 0.9, Border::replicate, 0);
       for (const auto& [left, right] :
            {std::pair<std::ptrdiff_t, std::ptrdiff_t>{16, 16}, {0, 1}}) {
         const auto clamped = [&](std::ptrdiff_t x, std::ptrdiff_t y, int) {
@@ -210,7 +210,7 @@ TEST(BlurPyramid, BordersAreExactlyTheReplicateExtension) {
         };
         const Image padded = make_image(w + left + right, h + left + right, 1, clamped);
         Image padded_out(padded.width(), padded.height(), 1);
-        pyramid_blur(padded.plane(0), padded_out.plane(0), filter, levels, 0.9,
+        pyramid_blur(padded_out.plane(0), padded.plane(0), filter, levels, 0.9,
                      Border::replicate, 0);
         for (std::ptrdiff_t y = 0; y < h; ++y)
           for (std::ptrdiff_t x = 0; x < w; ++x)
@@ -239,7 +239,7 @@ TEST(BlurPyramid, MassOfContentAwayFromEdgesIsConserved) {
   for (PyramidFilter filter : kFilters)
     for (int levels : {1, 2, 3}) {
       Image out(w, h, 1);
-      pyramid_blur(in.plane(0), out.plane(0), filter, levels, 0.6, Border::replicate, 0);
+      pyramid_blur(out.plane(0), in.plane(0), filter, levels, 0.6, Border::replicate, 0);
       EXPECT_NEAR(plane_sum(out.plane(0)), plane_sum(in.plane(0)),
                   1e-6 * plane_sum(in.plane(0)))
           << pyramid_filter_name(filter) << ", " << levels << " levels";
@@ -254,7 +254,7 @@ TEST(BlurPyramid, MeanFollowsTheExactGaussian) {
     for (PyramidFilter filter : kFilters)
       for (double sigma : {2.0, 7.0}) {
         Image out(96, 96, 1);
-        pyramid_blur_sigma(p.image.plane(0), out.plane(0), filter, sigma);
+        pyramid_blur_sigma(out.plane(0), p.image.plane(0), filter, sigma);
         const DoublePlane exact = reference_gaussian(p.image.plane(0), sigma, Border::replicate);
         double exact_sum = 0;
         for (double v : exact.values) exact_sum += v;
@@ -267,8 +267,8 @@ TEST(BlurPyramid, OneAndTwoThreadsGiveIdenticalResults) {
   const Image in = random_image(129, 67, 9);
   for (PyramidFilter filter : kFilters) {
     Image one(129, 67, 1), two(129, 67, 1);
-    pyramid_blur(in.plane(0), one.plane(0), filter, 3, 0.7, Border::replicate, 1);
-    pyramid_blur(in.plane(0), two.plane(0), filter, 3, 0.7, Border::replicate, 2);
+    pyramid_blur(one.plane(0), in.plane(0), filter, 3, 0.7, Border::replicate, 1);
+    pyramid_blur(two.plane(0), in.plane(0), filter, 3, 0.7, Border::replicate, 2);
     EXPECT_EQ(std::memcmp(one.data(), two.data(), 129 * 67 * sizeof(float)), 0)
         << pyramid_filter_name(filter);
   }
@@ -297,8 +297,8 @@ TEST(BlurPyramid, EffectiveSigmaBetweenLevelsFollowsTheTarget) {
   const std::vector<TestPattern> patterns = quality_test_set(96, 2);
   for (PyramidFilter filter : kFilters)
     for (double target : {4.5}) {  // between levels 2 and 3 of every filter
-      const PlaneBlur blur = [&](ConstPlane in, Plane out) {
-        pyramid_blur_sigma(in, out, filter, target);
+      const PlaneBlur blur = [&](Plane out, ConstPlane in) {
+        pyramid_blur_sigma(out, in, filter, target);
       };
       const double sigma = effective_sigma(blur, patterns, 0.8 * target, 1.25 * target);
       EXPECT_NEAR(sigma, target, 0.04 * target) << pyramid_filter_name(filter);
@@ -316,11 +316,11 @@ TEST(BlurPyramid, RegisteredMaxErrorHoldsOnTheTestPatterns) {
     EXPECT_FALSE(method.borders.contains(Border::mirror));
     double worst = 0;
     for (double sigma : {method.min_sigma, 1.7, 2.6, 5.0, 9.6, 21.0, method.max_sigma}) {
-      BlurSettings settings;
+      BlurOptions settings;
       settings.sigma = sigma;
       for (const TestPattern& p : patterns) {
         Image out(p.image.width(), p.image.height(), 1);
-        blur(method, p.image.plane(0), out.plane(0), settings);
+        blur(out.plane(0), p.image.plane(0), method, settings);
         const DoublePlane exact = reference_gaussian(p.image.plane(0), sigma, Border::replicate);
         const double error = blur_error(out.plane(0), exact).max_abs;
         worst = std::max(worst, error);
@@ -337,30 +337,30 @@ TEST(BlurPyramid, RejectsBadArguments) {
   const auto argument = [](const std::function<void()>& f) {
     return invalid_argument_of(f).argument;
   };
-  EXPECT_EQ(argument([&] { pyramid_blur(a.plane(0), b.plane(0), PyramidFilter::quasi, -1); }),
+  EXPECT_EQ(argument([&] { pyramid_blur(b.plane(0), a.plane(0), PyramidFilter::quasi, -1); }),
             "levels");
-  EXPECT_EQ(argument([&] { pyramid_blur(a.plane(0), b.plane(0), PyramidFilter::quasi, 31); }),
+  EXPECT_EQ(argument([&] { pyramid_blur(b.plane(0), a.plane(0), PyramidFilter::quasi, 31); }),
             "levels");
-  EXPECT_EQ(argument([&] { pyramid_blur(a.plane(0), c.plane(0), PyramidFilter::quasi, 1); }),
+  EXPECT_EQ(argument([&] { pyramid_blur(c.plane(0), a.plane(0), PyramidFilter::quasi, 1); }),
             "out");
   EXPECT_EQ(argument([&] { pyramid_blur(a.plane(0), a.plane(0), PyramidFilter::quasi, 1); }),
             "out");
   EXPECT_EQ(argument([&] {
-              pyramid_blur(a.plane(0), b.plane(0), PyramidFilter::box2, 1, Border::mirror);
+              pyramid_blur(b.plane(0), a.plane(0), PyramidFilter::box2, 1, Border::mirror);
             }),
             "border");
   EXPECT_EQ(argument([&] {
-              pyramid_blur(a.plane(0), b.plane(0), PyramidFilter::box2, 1, -0.5,
+              pyramid_blur(b.plane(0), a.plane(0), PyramidFilter::box2, 1, -0.5,
                            Border::replicate, 0);
             }),
             "coarse_sigma");
   EXPECT_EQ(argument([&] {
-              pyramid_blur(a.plane(0), b.plane(0), PyramidFilter::box2, 1, NAN,
+              pyramid_blur(b.plane(0), a.plane(0), PyramidFilter::box2, 1, NAN,
                            Border::replicate, 0);
             }),
             "coarse_sigma");
   EXPECT_EQ(argument([&] {
-              pyramid_blur(a.plane(0), b.plane(0), PyramidFilter::box4, 1, Border::replicate,
+              pyramid_blur(b.plane(0), a.plane(0), PyramidFilter::box4, 1, Border::replicate,
                            -1);
             }),
             "threads");

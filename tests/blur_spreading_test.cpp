@@ -144,7 +144,7 @@ TEST(Spreading, ImpulseResponseIsTheTensorTent) {
     const std::ptrdiff_t n = 2 * k.radius + 9, c = n / 2;
     const Image in = impulse_image(n, n, c, c);
     Image out(n, n, 1);
-    polynomial_spread(in.plane(0), out.plane(0), k, Border::zero, 1);
+    polynomial_spread(out.plane(0), in.plane(0), k, Border::zero, 1);
     double worst = 0;
     for (std::ptrdiff_t y = 0; y < n; ++y)
       for (std::ptrdiff_t x = 0; x < n; ++x)
@@ -163,7 +163,7 @@ TEST(Spreading, EveryPixelMatchesBruteForceIncludingBorders) {
       for (Border border : {Border::replicate, Border::zero}) {
         const Image in = random_image(size.w, size.h, seed++);
         Image out(size.w, size.h, 1);
-        polynomial_spread(in.plane(0), out.plane(0), k, border, 2);
+        polynomial_spread(out.plane(0), in.plane(0), k, border, 2);
         const DoublePlane expected = brute_separable(in.plane(0), tent_samples(k), border);
         EXPECT_LT(max_difference(out.plane(0), expected), 2e-6)
             << size.w << " x " << size.h << " radius " << k.radius << " "
@@ -178,7 +178,7 @@ TEST(Spreading, ConstantImageStaysConstant) {
         return 0.7f;
       });
       Image out(size.w, size.h, 1);
-      blur(find_blur_method("kosloff"), in.plane(0), out.plane(0), {sigma, Border::replicate, 1});
+      blur(out.plane(0), in.plane(0), find_blur_method("kosloff"), {sigma, Border::replicate, 1});
       for (std::ptrdiff_t y = 0; y < size.h; ++y)
         for (std::ptrdiff_t x = 0; x < size.w; ++x)
           ASSERT_NEAR(out(x, y, 0), 0.7f, 1e-6) << sigma;
@@ -192,7 +192,7 @@ TEST(Spreading, RunningSumsDoNotDriftOnLongLines) {
   Image in = random_image(n, 1, 7);
   const SpreadingKernel k{20, 0.5};
   Image out(n, 1, 1);
-  polynomial_spread(in.plane(0), out.plane(0), k, Border::replicate, 1);
+  polynomial_spread(out.plane(0), in.plane(0), k, Border::replicate, 1);
   const DoublePlane expected = brute_separable(in.plane(0), tent_samples(k), Border::replicate);
   EXPECT_LT(max_difference(out.plane(0), expected), 1e-6);
 }
@@ -207,8 +207,8 @@ TEST(Spreading, EffectiveSigmaMatchesSeedTableA4) {
   } rows[] = {{6, 2.509615}, {10, 4.25}, {20, 8.538462}};
   for (const auto& row : rows) {
     const SpreadingKernel k{row.r, 0.0};
-    const PlaneBlur spread = [k](ConstPlane in, Plane out) {
-      polynomial_spread(in, out, k, Border::replicate, 1);
+    const PlaneBlur spread = [k](Plane out, ConstPlane in) {
+      polynomial_spread(out, in, k, Border::replicate, 1);
     };
     const double own = std::sqrt(spreading_variance(k));
     const double fitted = effective_sigma(spread, patterns, 0.8 * own, 1.3 * own);
@@ -242,11 +242,11 @@ TEST(SpreadingAndReshuffle, RegisteredMaxErrorHolds) {
   for (const char* name : {"kosloff", "reshuffle"}) {
     const BlurMethod& method = find_blur_method(name);
     for (double sigma : {1.0, 2.0, 4.0, 8.0, 16.0, 32.0}) {
-      const BlurSettings settings{sigma, Border::replicate, 1};
+      const BlurOptions settings{sigma, Border::replicate, 1};
       double worst = 0;
       for (const TestPattern& p : patterns) {
         Image out(64, 64, 1);
-        blur(method, p.image.plane(0), out.plane(0), settings);
+        blur(out.plane(0), p.image.plane(0), method, settings);
         const DoublePlane exact =
             reference_gaussian(p.image.plane(0), sigma, Border::replicate, 1);
         worst = std::max(worst, blur_error(out.plane(0), exact).max_abs);
@@ -254,7 +254,7 @@ TEST(SpreadingAndReshuffle, RegisteredMaxErrorHolds) {
       EXPECT_LE(worst, method.max_error) << name << " sigma " << sigma;
     }
     for (double sigma : {0.75, 1.25, 1.625, 2.125, 3.0, 8.0}) {
-      const BlurSettings settings{sigma, Border::replicate, 1};
+      const BlurOptions settings{sigma, Border::replicate, 1};
       EXPECT_LE(operator_norm_error(plane_blur(method, settings), sigma) / 2, method.max_error)
           << name << " sigma " << sigma;
     }
@@ -267,8 +267,8 @@ TEST(SpreadingAndReshuffle, ThreadCountDoesNotChangeTheResult) {
       for (Border border : {Border::replicate, Border::zero}) {
         const Image in = random_image(size.w, size.h, 3);
         Image one(size.w, size.h, 1), two(size.w, size.h, 1);
-        blur(find_blur_method(name), in.plane(0), one.plane(0), {3.0, border, 1});
-        blur(find_blur_method(name), in.plane(0), two.plane(0), {3.0, border, 2});
+        blur(one.plane(0), in.plane(0), find_blur_method(name), {3.0, border, 1});
+        blur(two.plane(0), in.plane(0), find_blur_method(name), {3.0, border, 2});
         EXPECT_TRUE(identical(one.plane(0), two.plane(0))) << name;
       }
 }
@@ -281,7 +281,7 @@ TEST(SpreadingAndReshuffle, TinyImagesMatchTheReferenceForReshuffle) {
     for (Border border : {Border::replicate, Border::mirror, Border::zero, Border::periodic}) {
       const Image in = random_image(size.w, size.h, seed++);
       Image out(size.w, size.h, 1);
-      blur(method, in.plane(0), out.plane(0), {2.5, border, 0});
+      blur(out.plane(0), in.plane(0), method, {2.5, border, 0});
       const DoublePlane exact = reference_gaussian(in.plane(0), 2.5, border, 1);
       EXPECT_LT(max_difference(out.plane(0), exact), 1e-6)
           << size.w << " x " << size.h << " " << border_name(border);
@@ -338,7 +338,7 @@ TEST(Reshuffle, ArbitraryKernel2DMatchesBruteForce) {
 
   const Image impulse = impulse_image(11, 9, 5, 4);
   Image response(11, 9, 1);
-  reshuffle_filter(impulse.plane(0), response.plane(0), k, Border::zero, 1);
+  reshuffle_filter(response.plane(0), impulse.plane(0), k, Border::zero, 1);
   for (std::ptrdiff_t y = 0; y < 9; ++y)
     for (std::ptrdiff_t x = 0; x < 11; ++x) {
       const bool inside = std::abs(x - 5) <= 2 && std::abs(y - 4) <= 1;
@@ -351,7 +351,7 @@ TEST(Reshuffle, ArbitraryKernel2DMatchesBruteForce) {
     for (Border border : {Border::replicate, Border::mirror, Border::zero, Border::periodic}) {
       const Image in = random_image(size.w, size.h, seed++);
       Image out(size.w, size.h, 1);
-      reshuffle_filter(in.plane(0), out.plane(0), k, border, 2);
+      reshuffle_filter(out.plane(0), in.plane(0), k, border, 2);
       EXPECT_LT(max_difference(out.plane(0), brute_convolve(in.plane(0), kernel, 5, 3, border)),
                 1e-5)
           << size.w << " x " << size.h << " " << border_name(border);
@@ -367,7 +367,7 @@ TEST(Reshuffle, Arbitrary1DKernelSeparableMatchesBruteForce) {
     for (Border border : {Border::replicate, Border::mirror, Border::zero, Border::periodic}) {
       const Image in = random_image(size.w, size.h, seed++);
       Image out(size.w, size.h, 1);
-      reshuffle_filter_separable(in.plane(0), out.plane(0), k, border, 1);
+      reshuffle_filter_separable(out.plane(0), in.plane(0), k, border, 1);
       EXPECT_LT(max_difference(out.plane(0), brute_separable(in.plane(0), kernel, border)), 1e-5)
           << size.w << " x " << size.h << " " << border_name(border);
     }
@@ -392,7 +392,7 @@ TEST(Reshuffle, QuantisedKernelIsRealisedAndBounded) {
     EXPECT_LE(l1, static_cast<double>(g.size()) * largest / (2.0 * levels));
     const Image impulse = impulse_image(2 * r + 5, 1, r + 2, 0);
     Image response(2 * r + 5, 1, 1);
-    reshuffle_filter(impulse.plane(0), response.plane(0), k, Border::zero, 1);  // along x only
+    reshuffle_filter(response.plane(0), impulse.plane(0), k, Border::zero, 1);  // along x only
     for (std::ptrdiff_t x = -r; x <= r; ++x)
       EXPECT_NEAR(response(x + r + 2, 0, 0), expected[x + r], 1e-7) << levels << " " << x;
   }
@@ -402,7 +402,7 @@ TEST(Reshuffle, ConstantImageStaysConstant) {
   const Image in = testing_util::make_image(30, 20, 1, [](auto, auto, int) { return 0.3f; });
   Image out(30, 20, 1);
   for (double sigma : {0.25, 2.0, 20.0}) {
-    blur(find_blur_method("reshuffle"), in.plane(0), out.plane(0), {sigma, Border::mirror, 1});
+    blur(out.plane(0), in.plane(0), find_blur_method("reshuffle"), {sigma, Border::mirror, 1});
     for (std::ptrdiff_t y = 0; y < 20; ++y)
       for (std::ptrdiff_t x = 0; x < 30; ++x) ASSERT_NEAR(out(x, y, 0), 0.3f, 1e-6);
   }
@@ -413,7 +413,7 @@ TEST(Reshuffle, ConstantImageStaysConstant) {
 TEST(SpreadingAndReshuffle, BadInputNamesTheArgument) {
   Image in(8, 8, 1), out(8, 8, 1), small(4, 8, 1);
   const auto spread = [&](SpreadingKernel k, Border b) {
-    polynomial_spread(in.plane(0), out.plane(0), k, b, 0);
+    polynomial_spread(out.plane(0), in.plane(0), k, b, 0);
   };
   EXPECT_EQ(invalid_argument_of([&] { spread({0, 0.0}, Border::replicate); }).argument, "kernel");
   EXPECT_EQ(invalid_argument_of([&] { spread({3, 1.5}, Border::replicate); }).argument, "kernel");
@@ -422,7 +422,7 @@ TEST(SpreadingAndReshuffle, BadInputNamesTheArgument) {
   EXPECT_EQ(mirror.argument, "border");
   EXPECT_TRUE(contains(mirror.message, "mirror"));
   EXPECT_EQ(invalid_argument_of([&] {
-              polynomial_spread(in.plane(0), small.plane(0), {3, 0.0}, Border::zero);
+              polynomial_spread(small.plane(0), in.plane(0), {3, 0.0}, Border::zero);
             }).argument,
             "out");
   EXPECT_EQ(invalid_argument_of([] { spreading_kernel_for_sigma(-1); }).argument, "sigma");
@@ -442,25 +442,25 @@ TEST(SpreadingAndReshuffle, BadInputNamesTheArgument) {
   const std::vector<double> square(9, 1.0 / 9);
   const ReshuffledKernel box = reshuffle_kernel(square, 3, 3);
   EXPECT_EQ(invalid_argument_of([&] {
-              reshuffle_filter_separable(in.plane(0), out.plane(0), box, Border::zero);
+              reshuffle_filter_separable(out.plane(0), in.plane(0), box, Border::zero);
             }).argument,
             "kernel");
   EXPECT_EQ(invalid_argument_of([&] {
-              reshuffle_filter(in.plane(0), out.plane(0), ReshuffledKernel{}, Border::zero);
+              reshuffle_filter(out.plane(0), in.plane(0), ReshuffledKernel{}, Border::zero);
             }).argument,
             "kernel");
   EXPECT_EQ(invalid_argument_of([&] {
-              reshuffle_filter(in.plane(0), out.plane(0), box, Border::zero, -1);
+              reshuffle_filter(out.plane(0), in.plane(0), box, Border::zero, -1);
             }).argument,
             "threads");
   // Through the registry: kosloff has no mirror border, reshuffle no sigma above 64.
   EXPECT_EQ(invalid_argument_of([&] {
-              blur(find_blur_method("kosloff"), in.plane(0), out.plane(0),
+              blur(out.plane(0), in.plane(0), find_blur_method("kosloff"),
                    {2.0, Border::mirror, 0});
             }).argument,
             "border");
   EXPECT_EQ(invalid_argument_of([&] {
-              blur(find_blur_method("reshuffle"), in.plane(0), out.plane(0),
+              blur(out.plane(0), in.plane(0), find_blur_method("reshuffle"),
                    {100.0, Border::replicate, 0});
             }).argument,
             "sigma");

@@ -134,7 +134,7 @@ TEST(BlurQuality, EffectiveSigmaOfTwoGaussiansInARow) {
   // Gaussians compose: sigma 2 after sigma 1.5 is the Gaussian of sigma 2.5 (sampled kernels
   // compose to within 1e-3 in sigma at these sizes).
   const std::vector<TestPattern> set = quality_test_set(48);
-  const PlaneBlur twice = [](ConstPlane in, Plane out) {
+  const PlaneBlur twice = [](Plane out, ConstPlane in) {
     const DoublePlane first = reference_gaussian(in, 1.5, Border::replicate);
     const DoublePlane second = reference_gaussian(first, 2.0, Border::replicate);
     for (std::ptrdiff_t y = 0; y < in.height(); ++y)
@@ -171,8 +171,8 @@ TEST(BlurRegistry, EveryMethodIsDescribed) {
 TEST(BlurRegistry, BadArgumentsAreNamed) {
   const BlurMethod& method = find_blur_method("iir-deriche");
   Image in(16, 8, 1), out(16, 8, 1), small(15, 8, 1);
-  const auto argument = [&](Plane dst, BlurSettings s) {
-    return invalid_argument_of([&] { blur(method, in.plane(0), dst, s); }).argument;
+  const auto argument = [&](Plane dst, BlurOptions s) {
+    return invalid_argument_of([&] { blur(dst, in.plane(0), method, s); }).argument;
   };
   EXPECT_EQ(argument(small.plane(0), {2.0}), "out");
   EXPECT_EQ(argument(out.plane(0), {NAN}), "sigma");
@@ -181,7 +181,7 @@ TEST(BlurRegistry, BadArgumentsAreNamed) {
   EXPECT_EQ(argument(out.plane(0), {2.0, Border::periodic}), "border");
   EXPECT_EQ(argument(out.plane(0), {2.0, Border::replicate, -1}), "threads");
   EXPECT_EQ(invalid_argument_of([&] {
-              blur(method, in.plane(0), in.plane(0).sub({1, 0, 15, 8}), {2.0});
+              blur(in.plane(0).sub({1, 0, 15, 8}), in.plane(0), method, {2.0});
             }).argument,
             "out");
 }
@@ -211,7 +211,7 @@ TEST(BlurRecursive, WithinItsStatedErrorAcrossSigmas) {
       double worst = 0;
       for (const TestPattern& p : quality_test_set(n)) {
         Image out(n, n, 1);
-        blur(method, p.image.plane(0), out.plane(0), {sigma});
+        blur(out.plane(0), p.image.plane(0), method, {sigma});
         const DoublePlane exact = reference_gaussian(p.image.plane(0), sigma, Border::replicate);
         worst = std::max(worst, blur_error(out.plane(0), exact).max_abs);
       }
@@ -244,7 +244,7 @@ TEST(BlurRecursive, OddSizesAndBordersMatchTheReference) {
           if (!method.borders.contains(border)) continue;
           const Image in = random_image(w, h, static_cast<unsigned>(w * 100 + h));
           Image out(w, h, 1);
-          blur(method, in.plane(0), out.plane(0), {c.small_sigma, border, 2});
+          blur(out.plane(0), in.plane(0), method, {c.small_sigma, border, 2});
           const DoublePlane exact = reference_gaussian(in.plane(0), c.small_sigma, border);
           EXPECT_LE(blur_error(out.plane(0), exact).max_abs, method.max_error)
               << c.name << " " << w << " x " << h << " " << border_name(border);
@@ -257,13 +257,13 @@ TEST(BlurRecursive, ConstantStaysConstantAndThreadsAgree) {
     const BlurMethod& method = find_blur_method(c.name);
     Image flat = make_image(70, 45, 1, [](auto, auto, int) { return 0.625f; });
     Image out(70, 45, 1);
-    blur(method, flat.plane(0), out.plane(0), {20.0});
+    blur(out.plane(0), flat.plane(0), method, {20.0});
     for (std::ptrdiff_t y = 0; y < 45; ++y)
       for (std::ptrdiff_t x = 0; x < 70; ++x) ASSERT_NEAR(out(x, y, 0), 0.625f, 2e-6) << c.name;
     const Image in = random_image(70, 45, 9);
     Image one(70, 45, 1), two(70, 45, 1);
-    blur(method, in.plane(0), one.plane(0), {2 * c.small_sigma, Border::replicate, 1});
-    blur(method, in.plane(0), two.plane(0), {2 * c.small_sigma, Border::replicate, 2});
+    blur(one.plane(0), in.plane(0), method, {2 * c.small_sigma, Border::replicate, 1});
+    blur(two.plane(0), in.plane(0), method, {2 * c.small_sigma, Border::replicate, 2});
     for (std::ptrdiff_t y = 0; y < 45; ++y)
       for (std::ptrdiff_t x = 0; x < 70; ++x) ASSERT_EQ(one(x, y, 0), two(x, y, 0)) << c.name;
   }
@@ -279,7 +279,7 @@ Moments impulse_moments(const BlurMethod& method, double sigma, std::ptrdiff_t n
   Image impulse(n, n, 1), out(n, n, 1);
   const std::ptrdiff_t c = n / 2;
   impulse(c, c, 0) = 1;
-  blur(method, impulse.plane(0), out.plane(0), {sigma, Border::mirror, 2});
+  blur(out.plane(0), impulse.plane(0), method, {sigma, Border::mirror, 2});
   Moments m;
   for (std::ptrdiff_t y = 0; y < n; ++y)
     for (std::ptrdiff_t x = 0; x < n; ++x) {
@@ -309,7 +309,7 @@ TEST(BlurDiffusion, WithinTheStatedErrorOfTheInsulatedGaussian) {
       double worst = 0;
       for (const TestPattern& p : quality_test_set(48)) {
         Image out(48, 48, 1);
-        blur(method, p.image.plane(0), out.plane(0), {sigma, Border::mirror});
+        blur(out.plane(0), p.image.plane(0), method, {sigma, Border::mirror});
         const DoublePlane exact = reference_gaussian(p.image.plane(0), sigma, Border::mirror);
         worst = std::max(worst, blur_error(out.plane(0), exact).max_abs);
       }
@@ -326,12 +326,12 @@ TEST(BlurImage, EveryChannelIsBlurredAndOutIsSized) {
   const BlurMethod& method = find_blur_method("iir-deriche");
   const Image in = make_image(20, 10, 3, [](auto x, auto, int c) { return c == 1 ? x / 20.f : 0.f; });
   Image out;
-  blur(method, in, out, {2.0});
+  blur(out, in, method, {2.0});
   ASSERT_EQ(out.width(), 20);
   ASSERT_EQ(out.channels(), 3);
   EXPECT_NEAR(out(10, 5, 1), 0.5f, 0.03);  // a ramp stays a ramp away from the edges
   EXPECT_NEAR(out(10, 5, 0), 0.f, 1e-6);
-  EXPECT_EQ(invalid_argument_of([&] { blur(method, in, const_cast<Image&>(in), {2.0}); }).argument,
+  EXPECT_EQ(invalid_argument_of([&] { blur(const_cast<Image&>(in), in, method, {2.0}); }).argument,
             "out");
 }
 

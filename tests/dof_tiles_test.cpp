@@ -120,7 +120,7 @@ TEST(DofTiles, CopyUnreachedTilesWritesOnlyThoseTiles) {
   const Image coc = make_coc(40, 30, [](auto x, auto y) { return x < 8 && y < 8 ? 4.f : 0.f; });
   const TileMap tiles(coc.plane(0), 1.f, 8);
   Image out(40, 30, 1);
-  copy_unreached_tiles(tiles, in.plane(0), out.plane(0));
+  copy_unreached_tiles(out.plane(0), in.plane(0), tiles);
   for (std::ptrdiff_t y = 0; y < 30; ++y)
     for (std::ptrdiff_t x = 0; x < 40; ++x) {
       const bool reached = x < 16 && y < 16;
@@ -134,7 +134,7 @@ TEST(DofTiles, BadArgumentsAreNamed) {
   EXPECT_THROW(TileMap(coc.plane(0), 1.f, 8, -1), InvalidArgument);
   Image other(11, 10, 1);
   const TileMap tiles(coc.plane(0), 1.f, 8);
-  EXPECT_THROW(copy_unreached_tiles(tiles, coc.plane(0), other.plane(0)), InvalidArgument);
+  EXPECT_THROW(copy_unreached_tiles(other.plane(0), coc.plane(0), tiles), InvalidArgument);
   // `threads` means what it means everywhere in the library: 0 to kMaxThreads.
   for (int threads : {-1, kMaxThreads + 1, 1 << 20}) {
     EXPECT_EQ(testing_util::invalid_argument_of(
@@ -144,7 +144,7 @@ TEST(DofTiles, BadArgumentsAreNamed) {
         << threads;
     Image out(10, 10, 1);
     EXPECT_EQ(testing_util::invalid_argument_of([&] {
-                copy_unreached_tiles(tiles, coc.plane(0), out.plane(0), threads);
+                copy_unreached_tiles(out.plane(0), coc.plane(0), tiles, threads);
               }).argument,
               "threads")
         << threads;

@@ -269,7 +269,7 @@ TEST_F(ImageIo, JpegRoundTripIsClose) {
 
 TEST_F(ImageIo, LinearPngIsTaggedAndReadBackLinear) {
   const Image image = random_image(8, 8, 3, 0.f, 1.f, 5);
-  write_image(file("linear.png"), image, ColorEncoding::Linear);
+  write_image(file("linear.png"), image, {.encoding = ColorEncoding::Linear});
   EXPECT_EQ(spec_of(file("linear.png")).get_string_attribute("oiio:ColorSpace"), "Linear");
   const ColorImage read = read_color(file("linear.png"));
   EXPECT_EQ(read.encoding, ColorEncoding::Linear);
@@ -292,7 +292,7 @@ TEST_F(ImageIo, AutoReads8BitPngAsSrgb) {
   for (int c = 0; c < 3; ++c) EXPECT_NEAR(read.pixels(3, 2, c), expected, 1e-6f * expected);
 
   // Asking overrides the file.
-  const ColorImage raw = read_color(file("grey128.png"), ColorEncoding::Linear);
+  const ColorImage raw = read_color(file("grey128.png"), {.encoding = ColorEncoding::Linear});
   EXPECT_EQ(raw.encoding, ColorEncoding::Linear);
   EXPECT_FLOAT_EQ(raw.pixels(0, 0, 0), 128.f / 255.f);
 }
@@ -315,7 +315,7 @@ TEST_F(ImageIo, AutoReadsExrUnchanged) {
   for (int c = 0; c < 4; ++c) EXPECT_EQ(read.pixels(0, 0, c), pixels[c]);
 
   // Forcing sRGB curves the colour but never the alpha.
-  const ColorImage forced = read_color(file("linear.exr"), ColorEncoding::Srgb);
+  const ColorImage forced = read_color(file("linear.exr"), {.encoding = ColorEncoding::Srgb});
   EXPECT_EQ(forced.encoding, ColorEncoding::Srgb);
   EXPECT_FLOAT_EQ(forced.pixels(0, 0, 0), srgb_to_linear(0.5f));
   EXPECT_EQ(forced.pixels(0, 0, 3), 0.75f);
@@ -396,14 +396,14 @@ TEST_F(ImageIo, ForcedSrgbThatOverflowsIsRefusedNamingThePixel) {
   pixels[(1 * 4 + 2) * 3 + 1] = 1e20f;  // pixel (2, 1), G
   write_floats(file("bright.exr"), 4, 2, {"R", "G", "B"}, pixels);
   const std::string message =
-      message_of([&] { read_color(file("bright.exr"), ColorEncoding::Srgb); });
+      message_of([&] { read_color(file("bright.exr"), {.encoding = ColorEncoding::Srgb}); });
   EXPECT_TRUE(contains(message, "bright.exr: pixel (2, 1) of channel 'G' is too large for the "
                                 "sRGB curve"))
       << message;
   EXPECT_EQ(read_color(file("bright.exr")).pixels(2, 1, 1), 1e20f);  // linear: as stored
   pixels[(1 * 4 + 2) * 3 + 1] = 1e15f;
   write_floats(file("bright.exr"), 4, 2, {"R", "G", "B"}, pixels);
-  const float decoded = read_color(file("bright.exr"), ColorEncoding::Srgb).pixels(2, 1, 1);
+  const float decoded = read_color(file("bright.exr"), {.encoding = ColorEncoding::Srgb}).pixels(2, 1, 1);
   EXPECT_NEAR(decoded / std::pow(1e15 / 1.055, 2.4), 1.0, 1e-4);
 }
 
@@ -721,9 +721,9 @@ TEST_F(ImageIo, DeclaredSizeAboveTheLimitIsRefusedFromTheHeader) {
 
   // The limit is the caller's: a 6 x 5 image against 29 and 30 pixels.
   write_image(file("small.png"), random_image(6, 5, 3, 0.f, 1.f, 4));
-  EXPECT_TRUE(contains(message_of([&] { read_color(file("small.png"), ColorEncoding::Auto, 29); }),
+  EXPECT_TRUE(contains(message_of([&] { read_color(file("small.png"), {.max_pixels = 29}); }),
                        "small.png: is 6 x 5 = 30 pixels, more than the limit of 29"));
-  EXPECT_NO_THROW(read_color(file("small.png"), ColorEncoding::Auto, 30));
+  EXPECT_NO_THROW(read_color(file("small.png"), {.max_pixels = 30}));
   DepthOptions depth;
   depth.max_pixels = 29;
   depth.channel = "R";

@@ -47,7 +47,7 @@ std::string row_json(const BlurMethod& method, double sigma) {
   double max_error = 0;
   for (const TestPattern& p : patterns) {
     Image out(size, size, 1);
-    run(p.image.plane(0), out.plane(0));
+    run(out.plane(0), p.image.plane(0));
     const DoublePlane exact = reference_gaussian(p.image.plane(0), sigma, border);
     max_error = std::max(max_error, blur_error(out.plane(0), exact).max_abs);
   }
@@ -74,8 +74,8 @@ std::string level_json(const SeedTable& seed, int levels) {
   const double guess = pyramid_sigma(seed.filter, levels);
   const std::ptrdiff_t size = std::max<std::ptrdiff_t>(96, static_cast<std::ptrdiff_t>(8 * guess));
   const std::vector<TestPattern> patterns = quality_test_set(size);
-  const PlaneBlur run = [&](ConstPlane in, Plane out) {
-    pyramid_blur(in, out, seed.filter, levels);
+  const PlaneBlur run = [&](Plane out, ConstPlane in) {
+    pyramid_blur(out, in, seed.filter, levels);
   };
   const double effective = effective_sigma(run, patterns, 0.8 * guess, 1.25 * guess);
   char line[256];

@@ -38,10 +38,10 @@ ExtendedBox extended_box(double sigma, int passes) {
 
 namespace blur_detail {
 
-void run_box_extended(ConstPlane in, Plane out, const BlurSettings& settings) {
-  const ExtendedBox box = extended_box(settings.sigma, kDefaultBoxPasses);
+void run_box_extended(Plane out, ConstPlane in, const BlurOptions& options) {
+  const ExtendedBox box = extended_box(options.sigma, kDefaultBoxPasses);
   const std::vector<BoxPass> passes(kDefaultBoxPasses, BoxPass{box.radius, box.alpha});
-  box_passes(in, out, passes, threads_of(settings));
+  box_passes(out, in, passes, resolve_threads(options.threads));
 }
 
 }  // namespace blur_detail

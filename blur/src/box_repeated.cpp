@@ -199,7 +199,7 @@ void filter_rows(Plane plane, std::span<const BoxPass> passes, int threads) {
 
 }  // namespace
 
-void box_passes(ConstPlane in, Plane out, std::span<const BoxPass> passes, int threads) {
+void box_passes(Plane out, ConstPlane in, std::span<const BoxPass> passes, int threads) {
   if (in.width() < 1 || in.height() < 1 || !in.data())
     throw InvalidArgument("in", -1, -1, "is empty");
   if (out.width() != in.width() || out.height() != in.height())
@@ -211,16 +211,16 @@ void box_passes(ConstPlane in, Plane out, std::span<const BoxPass> passes, int t
       throw InvalidArgument("passes", -1, -1, "need radius >= 0 and end_weight in [0, 1]");
     if (p.radius > 0 || p.end_weight > 0) effective.push_back(p);
   }
-  const int resolved = detail::resolve_threads(threads);
+  const int resolved = resolve_threads(threads);
   filter_columns(in, out, effective, resolved);
   filter_rows(out, effective, resolved);
 }
 
 namespace blur_detail {
 
-void run_box(ConstPlane in, Plane out, const BlurSettings& settings) {
-  box_passes(in, out, plain_box_passes(settings.sigma, kDefaultBoxPasses),
-             threads_of(settings));
+void run_box(Plane out, ConstPlane in, const BlurOptions& options) {
+  box_passes(out, in, plain_box_passes(options.sigma, kDefaultBoxPasses),
+             resolve_threads(options.threads));
 }
 
 }  // namespace blur_detail

@@ -33,9 +33,9 @@ Image replicate_padded(ConstPlane in, std::ptrdiff_t margin) {
 
 }  // namespace
 
-void run_box_sat(ConstPlane in, Plane out, const BlurSettings& settings) {
-  const int threads = threads_of(settings);
-  const std::vector<std::ptrdiff_t> widths = box_widths(settings.sigma, kDefaultBoxPasses);
+void run_box_sat(Plane out, ConstPlane in, const BlurOptions& options) {
+  const int threads = resolve_threads(options.threads);
+  const std::vector<std::ptrdiff_t> widths = box_widths(options.sigma, kDefaultBoxPasses);
   std::ptrdiff_t margin = 0;
   for (std::ptrdiff_t width : widths) margin += (width - 1) / 2;
   Image padded = replicate_padded(in, margin);
@@ -44,9 +44,9 @@ void run_box_sat(ConstPlane in, Plane out, const BlurSettings& settings) {
     // The table holds all the pass needs, so the pass may write over its own input.
     const SummedAreaTable table(plane, threads);
     const std::ptrdiff_t radius = (width - 1) / 2;
-    sat_box_filter(table, plane, radius, radius, threads);
+    sat_box_filter(plane, table, radius, radius, threads);
   }
-  copy_plane(plane.sub({margin, margin, in.width(), in.height()}), out);
+  copy_plane(out, plane.sub({margin, margin, in.width(), in.height()}));
 }
 
 }  // namespace tridiff::blur_detail

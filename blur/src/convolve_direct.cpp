@@ -7,9 +7,9 @@
 
 namespace tridiff::blur_detail {
 
-void run_convolve_direct(ConstPlane in, Plane out, const BlurSettings& settings) {
-  convolve_2d(in, out, gaussian_kernel_2d(settings.sigma), settings.border,
-              threads_of(settings));
+void run_convolve_direct(Plane out, ConstPlane in, const BlurOptions& options) {
+  convolve_2d(out, in, gaussian_kernel_2d(options.sigma), options.border,
+              resolve_threads(options.threads));
 }
 
 }  // namespace tridiff::blur_detail

@@ -7,9 +7,9 @@
 
 namespace tridiff::blur_detail {
 
-void run_convolve_separable(ConstPlane in, Plane out, const BlurSettings& settings) {
-  const std::vector<float> kernel = gaussian_kernel(settings.sigma);
-  convolve_separable(in, out, kernel, kernel, settings.border, threads_of(settings));
+void run_convolve_separable(Plane out, ConstPlane in, const BlurOptions& options) {
+  const std::vector<float> kernel = gaussian_kernel(options.sigma);
+  convolve_separable(out, in, kernel, kernel, options.border, resolve_threads(options.threads));
 }
 
 }  // namespace tridiff::blur_detail

@@ -14,7 +14,7 @@ namespace {
 
 Image single_plane(ConstPlane plane) {
   Image image(plane.width(), plane.height(), 1);
-  copy_plane(plane, image.plane(0));
+  copy_plane(image.plane(0), plane);
   return image;
 }
 
@@ -36,15 +36,15 @@ int explicit_diffusion_steps(double sigma) {
   return static_cast<int>(std::ceil(2 * sigma * sigma));
 }
 
-void explicit_diffusion_blur(ConstPlane in, Plane out, double sigma, int threads) {
+void explicit_diffusion_blur(Plane out, ConstPlane in, double sigma, int threads) {
   const int steps = explicit_diffusion_steps(sigma);
   const float c = static_cast<float>(sigma * sigma / (2.0 * steps));
   Image image = single_plane(in);
   diffuse_isotropic(image, image, c, steps, with_threads(threads));
-  copy_plane(image.plane(0), out);
+  copy_plane(out, image.plane(0));
 }
 
-void implicit_diffusion_blur(ConstPlane in, Plane out, double sigma, int steps, int threads) {
+void implicit_diffusion_blur(Plane out, ConstPlane in, double sigma, int steps, int threads) {
   require_sigma(sigma);
   if (steps < 1) throw InvalidArgument("steps", -1, -1, "must be >= 1");
   LinkField beta(in.width(), in.height());
@@ -52,10 +52,10 @@ void implicit_diffusion_blur(ConstPlane in, Plane out, double sigma, int steps, 
   for (Plane links : {beta.horizontal(), beta.vertical()})
     for (std::ptrdiff_t y = 0; y < links.height(); ++y)
       std::fill_n(links.row(y), links.width(), b);
-  beta.finish();
+  beta.finish(threads);
   Image image = single_plane(in);
   for (int s = 0; s < steps; ++s) diffuse_adi(image, image, beta, with_threads(threads));
-  copy_plane(image.plane(0), out);
+  copy_plane(out, image.plane(0));
 }
 
 namespace blur_detail {
@@ -64,12 +64,12 @@ namespace blur_detail {
 // that falls like 1/K; 4 steps keep it within the stated error (see the tests).
 constexpr int kImplicitSteps = 4;
 
-void run_diffusion_explicit(ConstPlane in, Plane out, const BlurSettings& settings) {
-  explicit_diffusion_blur(in, out, settings.sigma, threads_of(settings));
+void run_diffusion_explicit(Plane out, ConstPlane in, const BlurOptions& options) {
+  explicit_diffusion_blur(out, in, options.sigma, resolve_threads(options.threads));
 }
 
-void run_diffusion_implicit(ConstPlane in, Plane out, const BlurSettings& settings) {
-  implicit_diffusion_blur(in, out, settings.sigma, kImplicitSteps, threads_of(settings));
+void run_diffusion_implicit(Plane out, ConstPlane in, const BlurOptions& options) {
+  implicit_diffusion_blur(out, in, options.sigma, kImplicitSteps, resolve_threads(options.threads));
 }
 
 }  // namespace blur_detail

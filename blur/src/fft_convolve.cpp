@@ -251,12 +251,12 @@ void inverse(Grid& grid, double gain, Plane out, int threads) {
 
 }  // namespace
 
-void fft_convolve_separable(ConstPlane in, Plane out, std::span<const float> kx,
+void fft_convolve_separable(Plane out, ConstPlane in, std::span<const float> kx,
                             std::span<const float> ky, Border border, int threads) {
-  blur_detail::check_convolution_planes(in, out, threads);
+  blur_detail::check_convolution_planes(out, in, threads);
   blur_detail::check_kernel(kx, "kx");
   blur_detail::check_kernel(ky, "ky");
-  const int team = blur_detail::threads_of({1.0, border, threads});
+  const int team = resolve_threads(threads);
   Grid grid = forward(in, std::ssize(kx) / 2, std::ssize(ky) / 2, border, team);
   const Plans& plans = *grid.plans;
   // The separable kernel's 2D transform is the product of its 1D transforms; FFTW's
@@ -269,11 +269,11 @@ void fft_convolve_separable(ConstPlane in, Plane out, std::span<const float> kx,
   inverse(grid, sum_of(kx) * sum_of(ky), out, team);
 }
 
-void fft_convolve(ConstPlane in, Plane out, const Kernel2D& kernel, Border border,
+void fft_convolve(Plane out, ConstPlane in, const Kernel2D& kernel, Border border,
                   int threads) {
-  blur_detail::check_convolution_planes(in, out, threads);
+  blur_detail::check_convolution_planes(out, in, threads);
   blur_detail::check_kernel(kernel, "kernel");
-  const int team = blur_detail::threads_of({1.0, border, threads});
+  const int team = resolve_threads(threads);
   const std::ptrdiff_t rx = kernel.width / 2, ry = kernel.height / 2;
   Grid grid = forward(in, rx, ry, border, team);
   const Plans& plans = *grid.plans;
@@ -302,9 +302,9 @@ void fft_convolve(ConstPlane in, Plane out, const Kernel2D& kernel, Border borde
 namespace blur_detail {
 
 // Method "fft": the Gaussian of gaussian_radius(sigma) through fft_convolve_separable.
-void run_fft_convolve(ConstPlane in, Plane out, const BlurSettings& settings) {
-  const std::vector<float> kernel = gaussian_kernel(settings.sigma);
-  fft_convolve_separable(in, out, kernel, kernel, settings.border, threads_of(settings));
+void run_fft_convolve(Plane out, ConstPlane in, const BlurOptions& options) {
+  const std::vector<float> kernel = gaussian_kernel(options.sigma);
+  fft_convolve_separable(out, in, kernel, kernel, options.border, resolve_threads(options.threads));
 }
 
 }  // namespace blur_detail

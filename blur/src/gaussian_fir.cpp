@@ -111,14 +111,14 @@ constexpr std::array<PlaneFilter, sizeof...(I)> filters(std::index_sequence<I...
 
 }  // namespace
 
-void run_gaussian_fir(ConstPlane in, Plane out, const BlurSettings& settings) {
-  const std::ptrdiff_t r = gaussian_radius(settings.sigma, kTailMass);
+void run_gaussian_fir(Plane out, ConstPlane in, const BlurOptions& options) {
+  const std::ptrdiff_t r = gaussian_radius(options.sigma, kTailMass);
   if (r > kMaxRadius)  // the registry's sigma range keeps r within the compiled windows
     throw InvalidArgument("sigma", -1, -1, "needs a radius of " + std::to_string(r) +
                                                " > " + std::to_string(kMaxRadius));
-  const std::vector<float> k = gaussian_kernel(settings.sigma, r);
+  const std::vector<float> k = gaussian_kernel(options.sigma, r);
   static constexpr auto kFilters = filters(std::make_index_sequence<kMaxRadius>());
-  kFilters[r - 1](in, out, k.data(), threads_of(settings));
+  kFilters[r - 1](in, out, k.data(), resolve_threads(options.threads));
 }
 
 }  // namespace tridiff::blur_detail

@@ -31,7 +31,7 @@
 
 namespace tridiff::blur_detail {
 
-void run_iir_deriche(ConstPlane, Plane, const BlurSettings&);  // iir_deriche.cpp
+void run_iir_deriche(Plane, ConstPlane, const BlurOptions&);  // iir_deriche.cpp
 
 namespace {
 
@@ -198,12 +198,12 @@ void upsample(ConstPlane coarse, Plane out, const Upsampling& up, int threads) {
 
 }  // namespace
 
-void run_iir_decimated(ConstPlane in, Plane out, const BlurSettings& settings) {
-  const double sigma = settings.sigma;
+void run_iir_decimated(Plane out, ConstPlane in, const BlurOptions& options) {
+  const double sigma = options.sigma;
   int levels = 1;
   while (levels < kMaxLevels && (std::ptrdiff_t{2} << (levels + 1)) <= sigma) ++levels;
   const std::ptrdiff_t f = std::ptrdiff_t{1} << levels;
-  const int threads = threads_of(settings);
+  const int threads = resolve_threads(options.threads);
 
   // Decimate level by level, alternating between two scratch planes; `offset` tracks where
   // coarse sample 0 sits: full position f_k i - offset_k.
@@ -219,7 +219,7 @@ void run_iir_decimated(ConstPlane in, Plane out, const BlurSettings& settings) {
   }
   const Plane blurred = coarse_plane(kBlurredSlot, level.width(), level.height());
   const double variance = (sigma * sigma - (2.0 * double(f * f) - 1) / 3) / double(f * f);
-  run_iir_deriche(level, blurred, {std::sqrt(variance), Border::replicate, threads});
+  run_iir_deriche(blurred, level, {std::sqrt(variance), Border::replicate, threads});
   upsample(blurred, out, {f, offset}, threads);
 }
 

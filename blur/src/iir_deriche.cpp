@@ -208,9 +208,9 @@ void filter_row_lanes(float* lanes, std::ptrdiff_t w, const Coefficients& k, boo
 
 }  // namespace
 
-void run_iir_deriche(ConstPlane in, Plane out, const BlurSettings& settings) {
-  const Coefficients k = deriche_coefficients(settings.sigma);
-  const bool replicate = settings.border == Border::replicate;
+void run_iir_deriche(Plane out, ConstPlane in, const BlurOptions& options) {
+  const Coefficients k = deriche_coefficients(options.sigma);
+  const bool replicate = options.border == Border::replicate;
   const std::ptrdiff_t w = in.width(), h = in.height();
   const std::ptrdiff_t vectors = w / kLanes, rest = w - vectors * kLanes;
   // The last w mod 16 columns go through a strip one vector wide (its unused lanes zero),
@@ -225,7 +225,7 @@ void run_iir_deriche(ConstPlane in, Plane out, const BlurSettings& settings) {
   auto rows_pass = [&](float* lanes, std::ptrdiff_t width) {
     filter_row_lanes(lanes, width, k, replicate);
   };
-#pragma omp parallel num_threads(threads_of(settings))
+#pragma omp parallel num_threads(resolve_threads(options.threads))
   {
     const int team = omp_get_num_threads(), t = omp_get_thread_num();
     const std::ptrdiff_t v0 = vectors * t / team, v1 = vectors * (t + 1) / team;

@@ -95,7 +95,7 @@ Kernel2D bilinear_box_kernel_2d() {
 
 namespace blur_detail {
 
-void check_convolution_planes(ConstPlane in, ConstPlane out, int threads) {
+void check_convolution_planes(ConstPlane out, ConstPlane in, int threads) {
   if (in.width() < 1 || in.height() < 1 || !in.data())
     throw InvalidArgument("in", -1, -1, "is empty");
   if (out.width() != in.width() || out.height() != in.height() || !out.data())
@@ -392,12 +392,12 @@ int stripe_count(int threads, std::ptrdiff_t h) {
 
 // ---- separable convolution --------------------------------------------------------------
 
-void convolve_separable(ConstPlane in, Plane out, std::span<const float> kx,
+void convolve_separable(Plane out, ConstPlane in, std::span<const float> kx,
                         std::span<const float> ky, Border border, int threads) {
-  blur_detail::check_convolution_planes(in, out, threads);
+  blur_detail::check_convolution_planes(out, in, threads);
   blur_detail::check_kernel(kx, "kx");
   blur_detail::check_kernel(ky, "ky");
-  const int team = blur_detail::threads_of({1.0, border, threads});
+  const int team = resolve_threads(threads);
   const std::ptrdiff_t w = in.width(), h = in.height();
   const std::ptrdiff_t rx = std::ssize(kx) / 2, ry = std::ssize(ky) / 2;
   const Taps taps_x(kx), taps_y(ky);
@@ -452,10 +452,10 @@ void convolve_separable(ConstPlane in, Plane out, std::span<const float> kx,
 
 // ---- 2D convolution ---------------------------------------------------------------------
 
-void convolve_2d(ConstPlane in, Plane out, const Kernel2D& kernel, Border border, int threads) {
-  blur_detail::check_convolution_planes(in, out, threads);
+void convolve_2d(Plane out, ConstPlane in, const Kernel2D& kernel, Border border, int threads) {
+  blur_detail::check_convolution_planes(out, in, threads);
   blur_detail::check_kernel(kernel, "kernel");
-  const int team = blur_detail::threads_of({1.0, border, threads});
+  const int team = resolve_threads(threads);
   const std::ptrdiff_t w = in.width(), h = in.height();
   const std::ptrdiff_t rx = kernel.width / 2, ry = kernel.height / 2;
   const Taps taps(kernel.weights);

@@ -209,7 +209,7 @@ SpreadingKernel spreading_kernel_for_sigma(double sigma) {
   return {static_cast<std::ptrdiff_t>(r), blend};
 }
 
-void polynomial_spread(ConstPlane in, Plane out, const SpreadingKernel& kernel, Border border,
+void polynomial_spread(Plane out, ConstPlane in, const SpreadingKernel& kernel, Border border,
                        int threads) {
   check_kernel(kernel);
   if (in.width() < 1 || in.height() < 1 || !in.data())
@@ -222,15 +222,15 @@ void polynomial_spread(ConstPlane in, Plane out, const SpreadingKernel& kernel, 
                               " is not supported by polynomial spreading (replicate, zero)");
   if (threads < 0) throw InvalidArgument("threads", -1, -1, "must be >= 0 (0: all cores)");
   const bool replicate = border == Border::replicate;
-  const int team = blur_detail::threads_of({1.0, border, threads});
+  const int team = resolve_threads(threads);
   spread_columns(in, out, kernel, replicate, team);
   spread_rows(out, kernel, replicate, team);
 }
 
 namespace blur_detail {
-void run_kosloff(ConstPlane in, Plane out, const BlurSettings& settings) {
-  polynomial_spread(in, out, spreading_kernel_for_sigma(settings.sigma), settings.border,
-                    settings.threads);
+void run_kosloff(Plane out, ConstPlane in, const BlurOptions& options) {
+  polynomial_spread(out, in, spreading_kernel_for_sigma(options.sigma), options.border,
+                    options.threads);
 }
 }  // namespace blur_detail
 

@@ -230,7 +230,7 @@ void smooth_only(ConstPlane in, Plane out, double sigma, int threads) {
   Level padded(input.x.widened(passes), input.y.widened(passes));
   fill_clamped(input, padded);
   smooth(padded.plane(), sigma, threads);
-  copy_plane(padded.plane().sub({passes, passes, in.width(), in.height()}), out);
+  copy_plane(out, padded.plane().sub({passes, passes, in.width(), in.height()}));
 }
 
 // 2^30 pixels per coarsest pixel is far beyond any image; the bound keeps 2^levels finite.
@@ -260,12 +260,6 @@ void check_arguments(ConstPlane in, ConstPlane out, int levels, double coarse_si
                           std::string(border_name(border)) +
                               " is not supported by the pyramid blur (replicate only)");
   if (threads < 0) throw InvalidArgument("threads", -1, -1, "must be >= 0 (0: all cores)");
-}
-
-int resolve_threads(int threads) {
-  BlurSettings settings;
-  settings.threads = threads;
-  return blur_detail::threads_of(settings);
 }
 
 // The effective sigma of 1 to 5 levels, measured with effective_sigma() (relative precision
@@ -298,7 +292,7 @@ std::string_view pyramid_filter_name(PyramidFilter filter) {
   return "unknown";
 }
 
-void pyramid_blur(ConstPlane in, Plane out, PyramidFilter filter, int levels,
+void pyramid_blur(Plane out, ConstPlane in, PyramidFilter filter, int levels,
                   double coarse_sigma, Border border, int threads) {
   check_arguments(in, out, levels, coarse_sigma, border, threads);
   const AnalysisTaps taps = analysis_taps(filter);
@@ -329,9 +323,9 @@ void pyramid_blur(ConstPlane in, Plane out, PyramidFilter filter, int levels,
   up_sample(view_of(pyramid[0]), out, input.x, input.y, team);
 }
 
-void pyramid_blur(ConstPlane in, Plane out, PyramidFilter filter, int levels, Border border,
+void pyramid_blur(Plane out, ConstPlane in, PyramidFilter filter, int levels, Border border,
                   int threads) {
-  pyramid_blur(in, out, filter, levels, 0.0, border, threads);
+  pyramid_blur(out, in, filter, levels, 0.0, border, threads);
 }
 
 double pyramid_sigma(PyramidFilter filter, int levels) {
@@ -358,25 +352,25 @@ PyramidPlan pyramid_plan(PyramidFilter filter, double sigma) {
   return plan;
 }
 
-void pyramid_blur_sigma(ConstPlane in, Plane out, PyramidFilter filter, double sigma,
+void pyramid_blur_sigma(Plane out, ConstPlane in, PyramidFilter filter, double sigma,
                         Border border, int threads) {
   const PyramidPlan plan = pyramid_plan(filter, sigma);
-  pyramid_blur(in, out, filter, plan.levels, plan.coarse_sigma, border, threads);
+  pyramid_blur(out, in, filter, plan.levels, plan.coarse_sigma, border, threads);
 }
 
 namespace blur_detail {
 
-void run_pyramid_box2(ConstPlane in, Plane out, const BlurSettings& settings) {
-  pyramid_blur_sigma(in, out, PyramidFilter::box2, settings.sigma, settings.border,
-                     settings.threads);
+void run_pyramid_box2(Plane out, ConstPlane in, const BlurOptions& options) {
+  pyramid_blur_sigma(out, in, PyramidFilter::box2, options.sigma, options.border,
+                     options.threads);
 }
-void run_pyramid_box4(ConstPlane in, Plane out, const BlurSettings& settings) {
-  pyramid_blur_sigma(in, out, PyramidFilter::box4, settings.sigma, settings.border,
-                     settings.threads);
+void run_pyramid_box4(Plane out, ConstPlane in, const BlurOptions& options) {
+  pyramid_blur_sigma(out, in, PyramidFilter::box4, options.sigma, options.border,
+                     options.threads);
 }
-void run_pyramid_quasi(ConstPlane in, Plane out, const BlurSettings& settings) {
-  pyramid_blur_sigma(in, out, PyramidFilter::quasi, settings.sigma, settings.border,
-                     settings.threads);
+void run_pyramid_quasi(Plane out, ConstPlane in, const BlurOptions& options) {
+  pyramid_blur_sigma(out, in, PyramidFilter::quasi, options.sigma, options.border,
+                     options.threads);
 }
 
 }  // namespace blur_detail

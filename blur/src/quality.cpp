@@ -61,8 +61,8 @@ BlurError blur_error(ConstPlane approx, const DoublePlane& exact) {
   return error;
 }
 
-PlaneBlur plane_blur(const BlurMethod& method, const BlurSettings& settings) {
-  return [&method, settings](ConstPlane in, Plane out) { blur(method, in, out, settings); };
+PlaneBlur plane_blur(const BlurMethod& method, const BlurOptions& options) {
+  return [&method, options](Plane out, ConstPlane in) { blur(out, in, method, options); };
 }
 
 double operator_norm_error(const PlaneBlur& blur_plane, double sigma) {
@@ -70,7 +70,7 @@ double operator_norm_error(const PlaneBlur& blur_plane, double sigma) {
   const std::ptrdiff_t centre = n / 2;
   Image impulse(n, n, 1), response(n, n, 1);
   impulse(centre, centre, 0) = 1;
-  blur_plane(impulse.plane(0), response.plane(0));
+  blur_plane(response.plane(0), impulse.plane(0));
   // The exact response is the outer product of the sampled kernel with itself.
   const std::ptrdiff_t r = std::min(reference_radius(sigma), centre);
   const std::vector<double> kernel = sampled_gaussian(sigma, r);
@@ -184,7 +184,7 @@ double effective_sigma(const PlaneBlur& blur_plane, std::span<const TestPattern>
   std::vector<DoublePlane> inputs, outputs;
   for (const TestPattern& p : patterns) {
     Image out(p.image.width(), p.image.height(), 1);
-    blur_plane(p.image.plane(0), out.plane(0));
+    blur_plane(out.plane(0), p.image.plane(0));
     inputs.push_back(to_double(p.image.plane(0)));
     outputs.push_back(to_double(out.plane(0)));
   }

@@ -74,7 +74,7 @@ DoublePlane reference_gaussian(const DoublePlane& in, double sigma, Border borde
   if (in.width < 1 || in.height < 1) throw InvalidArgument("in", -1, -1, "is empty");
   if (threads < 0) throw InvalidArgument("threads", -1, -1, "must be >= 0 (0: all cores)");
   const std::vector<double> kernel = sampled_gaussian(sigma, reference_radius(sigma));
-  return convolve_separable(in, kernel, border, blur_detail::threads_of({sigma, border, threads}));
+  return convolve_separable(in, kernel, border, resolve_threads(threads));
 }
 
 DoublePlane reference_gaussian(ConstPlane in, double sigma, Border border, int threads) {

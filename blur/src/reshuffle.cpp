@@ -66,8 +66,6 @@ void check_planes(ConstPlane in, ConstPlane out, int threads) {
   if (threads < 0) throw InvalidArgument("threads", -1, -1, "must be >= 0 (0: all cores)");
 }
 
-int team_size(int threads) { return blur_detail::threads_of({1.0, Border::replicate, threads}); }
-
 // `line` extended by `pad` pixels on each side by the border rule (zero border: 0).
 void extend_line(const float* line, std::ptrdiff_t n, std::ptrdiff_t pad, Border border,
                  float* extended) {
@@ -162,7 +160,7 @@ ReshuffledKernel reshuffle_kernel(std::span<const double> kernel, std::ptrdiff_t
   return out;
 }
 
-void reshuffle_filter(ConstPlane in, Plane out, const ReshuffledKernel& kernel, Border border,
+void reshuffle_filter(Plane out, ConstPlane in, const ReshuffledKernel& kernel, Border border,
                       int threads) {
   check_planes(in, out, threads);
   if (kernel.weights.empty() || kernel.weights.size() != kernel.links.size())
@@ -176,7 +174,7 @@ void reshuffle_filter(ConstPlane in, Plane out, const ReshuffledKernel& kernel, 
     if (j < 0) continue;  // zero border: the row stays 0
     extend_line(in.row(j), w, px, border, padded.data() + (y + py) * pw);
   }
-  const int team = team_size(threads);
+  const int team = resolve_threads(threads);
 #pragma omp parallel num_threads(team)
   {
     std::vector<float> sum;
@@ -191,26 +189,26 @@ void reshuffle_filter(ConstPlane in, Plane out, const ReshuffledKernel& kernel, 
   }
 }
 
-void reshuffle_filter_separable(ConstPlane in, Plane out, const ReshuffledKernel& kernel,
+void reshuffle_filter_separable(Plane out, ConstPlane in, const ReshuffledKernel& kernel,
                                 Border border, int threads) {
   check_planes(in, out, threads);
   if (kernel.weights.empty() || kernel.weights.size() != kernel.links.size())
     throw InvalidArgument("kernel", -1, -1, "is empty (make it with reshuffle_kernel)");
   if (kernel.radius_y != 0)
     throw InvalidArgument("kernel", -1, -1, "must be 1D (height 1) for the separable filter");
-  const int team = team_size(threads);
+  const int team = resolve_threads(threads);
   Image rows(in.width(), in.height(), 1);
   filter_rows(in, rows.plane(0), kernel, border, team);
   filter_columns(rows.plane(0), out, kernel, border, team);
 }
 
 namespace blur_detail {
-void run_reshuffle(ConstPlane in, Plane out, const BlurSettings& settings) {
+void run_reshuffle(Plane out, ConstPlane in, const BlurOptions& options) {
   const std::vector<double> gaussian =
-      sampled_gaussian(settings.sigma, reference_radius(settings.sigma));
+      sampled_gaussian(options.sigma, reference_radius(options.sigma));
   const ReshuffledKernel kernel =
       reshuffle_kernel(gaussian, static_cast<std::ptrdiff_t>(gaussian.size()), 1);
-  reshuffle_filter_separable(in, out, kernel, settings.border, settings.threads);
+  reshuffle_filter_separable(out, in, kernel, options.border, options.threads);
 }
 }  // namespace blur_detail
 

@@ -1,20 +1,15 @@
 // Summed-area tables built as parallel prefix scans, and the box filter through them with the
 // exact replicate border. See sat.hpp for the two tables and why the float one is tiled.
 #include "tridiff/blur/sat.hpp"
+#include "tridiff/threads.hpp"
 
 #include <algorithm>
 #include <string>
 
-#include "tridiff/solvers/solve.hpp"
 
 namespace tridiff {
 
 namespace {
-
-int checked_threads(int threads) {
-  if (threads < 0) throw InvalidArgument("threads", -1, -1, "must be >= 0 (0: all cores)");
-  return detail::resolve_threads(threads);
-}
 
 void check_input(ConstPlane in) {
   if (in.width() < 1 || in.height() < 1 || !in.data())
@@ -67,7 +62,7 @@ void box_filter(const Table& t, Plane out, std::ptrdiff_t rx, std::ptrdiff_t ry,
   if (out.width() != w || out.height() != h)
     throw InvalidArgument("out", -1, -1, "size differs from the table's");
   if (rx < 0 || ry < 0) throw InvalidArgument("radius", -1, -1, "must be >= 0");
-  threads = checked_threads(threads);
+  threads = resolve_threads(threads);
   const double inv_area = 1.0 / (double(2 * rx + 1) * double(2 * ry + 1));
   // Columns whose box lies inside the image horizontally: [inner_x0, inner_x1).
   const std::ptrdiff_t inner_x0 = std::min(rx, w), inner_x1 = std::max(inner_x0, w - rx);
@@ -100,7 +95,7 @@ void box_filter(const Table& t, Plane out, std::ptrdiff_t rx, std::ptrdiff_t ry,
 // same order whatever the thread count.
 SummedAreaTable::SummedAreaTable(ConstPlane in, int threads) {
   check_input(in);
-  threads = checked_threads(threads);
+  threads = resolve_threads(threads);
   width_ = in.width();
   height_ = in.height();
   stride_ = width_ + 1;
@@ -193,7 +188,7 @@ void build_tiled_band(const TiledBand& b, std::ptrdiff_t y0) {
 // pass turns the band-relative left edges into absolute ones.
 TiledFloatSummedAreaTable::TiledFloatSummedAreaTable(ConstPlane in, int threads) {
   check_input(in);
-  threads = checked_threads(threads);
+  threads = resolve_threads(threads);
   width_ = in.width();
   height_ = in.height();
   tiles_x_ = (width_ + kTile - 1) / kTile;
@@ -233,12 +228,12 @@ double TiledFloatSummedAreaTable::replicate_box_sum(std::ptrdiff_t x0, std::ptrd
   return replicate_sum(*this, x0, y0, x1, y1);
 }
 
-void sat_box_filter(const SummedAreaTable& table, Plane out, std::ptrdiff_t radius_x,
+void sat_box_filter(Plane out, const SummedAreaTable& table, std::ptrdiff_t radius_x,
                     std::ptrdiff_t radius_y, int threads) {
   box_filter(table, out, radius_x, radius_y, threads);
 }
 
-void sat_box_filter(const TiledFloatSummedAreaTable& table, Plane out, std::ptrdiff_t radius_x,
+void sat_box_filter(Plane out, const TiledFloatSummedAreaTable& table, std::ptrdiff_t radius_x,
                     std::ptrdiff_t radius_y, int threads) {
   box_filter(table, out, radius_x, radius_y, threads);
 }

@@ -10,7 +10,7 @@
 #include <utility>
 
 #include "tridiff/solvers/detail/subnormals.hpp"
-#include "tridiff/solvers/solve.hpp"
+#include "tridiff/threads.hpp"
 
 namespace tridiff {
 namespace {
@@ -86,8 +86,8 @@ std::ptrdiff_t run_steps(Plane dst, ConstPlane src, const LinkField& kappa, int 
   const std::ptrdiff_t width = src.width(), height = src.height();
   Image spare(width, height, 1);
   Plane ping = dst, pong = spare.plane(0);
-  if (dst.data() != src.data()) copy_plane(src, dst);
-  copy_plane(dst, pong);
+  if (dst.data() != src.data()) copy_plane(dst, src);
+  copy_plane(pong, dst);
   const std::ptrdiff_t tiles_x = kappa.tiles_x(), tiles_y = kappa.tiles_y();
   std::ptrdiff_t moving_pixels = 0;
   for (std::ptrdiff_t ty = 0; ty < tiles_y; ++ty)
@@ -112,7 +112,7 @@ std::ptrdiff_t run_steps(Plane dst, ConstPlane src, const LinkField& kappa, int 
     std::swap(ping, pong);
     if (stepped) stepped(step + 1);
   }
-  if (ping.data() != dst.data()) copy_plane(ping, dst);
+  if (ping.data() != dst.data()) copy_plane(dst, ping);
   return moving_pixels * steps;
 }
 
@@ -140,7 +140,7 @@ DiffusionReport diffuse_explicit_steps(Image& dst, const Image& src, const LinkF
   require_size(src, kappa.width(), kappa.height(), "kappa");
   require_finite(src);
   if (&dst != &src) dst = src;
-  const int threads = detail::resolve_threads(options.threads);
+  const int threads = resolve_threads(options.threads);
   DiffusionReport report;
   const int channels = src.channels();
   for (int c = 0; c < channels; ++c) {
@@ -167,7 +167,7 @@ DiffusionReport diffuse_explicit(Image& dst, const Image& src, const LinkField& 
       for (std::ptrdiff_t x = 0; x < from.width(); ++x)
         to(x, y) = std::min(kExplicitStabilityBound, from(x, y) * scale);  // rounding guard
   }
-  kappa.finish();
+  kappa.finish(options.threads);
   return diffuse_explicit_steps(dst, src, kappa, steps, options);
 }
 
@@ -180,7 +180,7 @@ void diffuse_isotropic(Image& dst, const Image& src, float c, int iterations,
   LinkField kappa(src.width(), src.height());
   for (Plane p : {kappa.horizontal(), kappa.vertical()})
     for (std::ptrdiff_t y = 0; y < p.height(); ++y) std::fill(p.row(y), p.row(y) + p.width(), c);
-  kappa.finish();
+  kappa.finish(options.threads);
   diffuse_explicit_steps(dst, src, kappa, iterations, options);
 }
 

@@ -1,6 +1,8 @@
 // LinkField: storage, validation and the per-tile activity record.
 #include "tridiff/diffusion/links.hpp"
 
+#include "tridiff/threads.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -25,7 +27,8 @@ void require_valid_link(float link, const char* direction, std::ptrdiff_t x, std
 
 }  // namespace
 
-void LinkField::finish() {
+void LinkField::finish(int threads) {
+  const int team = resolve_threads(threads);
   const std::ptrdiff_t w = width(), h = height();
   Plane horizontal_links = horizontal(), vertical_links = vertical();
   for (std::ptrdiff_t y = 0; y < h; ++y) horizontal_links(w - 1, y) = 0;
@@ -33,7 +36,8 @@ void LinkField::finish() {
 
   float largest = 0;
   bool invalid = false;
-#pragma omp parallel for schedule(static) reduction(max : largest) reduction(|| : invalid)
+#pragma omp parallel for num_threads(team) schedule(static) reduction(max : largest) \
+    reduction(|| : invalid)
   for (std::ptrdiff_t ty = 0; ty < tiles_y_; ++ty) {
     for (std::ptrdiff_t tx = 0; tx < tiles_x_; ++tx) {
       // probe = sum of 0 * link: zero unless a link is NaN or infinite (inf * 0 is NaN).

@@ -16,7 +16,7 @@
 #include "tridiff/dof/lens.hpp"
 #include "tridiff/dof/scene.hpp"
 #include "tridiff/image/io.hpp"
-#include "tridiff/solvers/solve.hpp"
+#include "tridiff/threads.hpp"
 
 namespace tridiff::cli {
 
@@ -159,7 +159,9 @@ void load_images(const Arguments& args, int threads, Frame& frame, ThinLens& len
     if (!args.has("depth")) throw InvalidArgument("--depth", -1, -1, "is required with --color");
     const ColorEncoding encoding = parse_encoding(args.text("color-encoding", "auto"));
     frame.color = with_stderr_muted([&] {
-                    return read_color(args.text("color", ""), encoding, max_pixels(args));
+                    return read_color(args.text("color", ""), {.encoding = encoding,
+                                                               .max_pixels = max_pixels(args),
+                                                               .threads = threads});
                   }).pixels;
     DepthOptions depth_options;
     depth_options.channel = args.text("depth-channel", "");
@@ -302,7 +304,7 @@ void with_coc_named(const Arguments& args, const std::function<void()>& work) {
 int thread_count(const Arguments& args) {
   const int threads = args.integer("threads", 0);
   try {
-    detail::resolve_threads(threads);
+    resolve_threads(threads);
   } catch (const InvalidArgument& error) {
     throw InvalidArgument("--threads", -1, -1, error.message());
   }

@@ -10,7 +10,7 @@
 #include "tridiff/image/io.hpp"
 #include "tridiff/ipf/model.hpp"
 #include "tridiff/ipf/performance.hpp"
-#include "tridiff/solvers/solve.hpp"  // kMaxThreads
+#include "tridiff/threads.hpp"
 
 namespace tridiff::cli {
 
@@ -300,7 +300,7 @@ int run_ipf(const Arguments& args) {
             (differ ? std::to_string(differ) + " values differ" : std::string("identical"));
   }
 
-  files.stage("--output", encode_image(output, result));
+  files.stage("--output", encode_image(output, result, {.threads = threads}));
   files.commit();
 
   const ipf::FramePlan& plan = perf.plan;

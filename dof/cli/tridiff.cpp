@@ -193,13 +193,14 @@ int run_dof(const cli::Arguments& args) {
   const double method_seconds = seconds(method_start);
 
   const auto write_start = std::chrono::steady_clock::now();
-  outputs.stage("--output", encode_image(plan.output, result));
+  const WriteOptions write{.threads = plan.threads};
+  outputs.stage("--output", encode_image(plan.output, result, write));
   if (!plan.coc_output.empty())
-    outputs.stage("--coc-output", encode_image(plan.coc_output,
-                                               coc_output_image(plan.coc_output, coc.plane(0)),
-                                               ColorEncoding::Linear));
+    outputs.stage("--coc-output",
+                  encode_image(plan.coc_output, coc_output_image(plan.coc_output, coc.plane(0)),
+                               {.encoding = ColorEncoding::Linear, .threads = plan.threads}));
   if (args.has("input-output"))
-    outputs.stage("--input-output", encode_image(args.text("input-output", ""), color));
+    outputs.stage("--input-output", encode_image(args.text("input-output", ""), color, write));
   const double write_seconds = seconds(write_start);
 
   std::ostringstream text, json;

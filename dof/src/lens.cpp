@@ -5,7 +5,7 @@
 #include <cmath>
 #include <string>
 
-#include "tridiff/solvers/solve.hpp"
+#include "tridiff/threads.hpp"
 
 namespace tridiff {
 namespace {
@@ -24,7 +24,7 @@ template <class Model>
 void coc_map(Plane coc, ConstPlane depth, int threads, Model model) {
   if (coc.width() != depth.width() || coc.height() != depth.height())
     throw InvalidArgument("coc", -1, -1, "size differs from the depth map");
-  const int team = detail::resolve_threads(threads);
+  const int team = resolve_threads(threads);
 #pragma omp parallel for num_threads(team) schedule(static)
   for (std::ptrdiff_t y = 0; y < depth.height(); ++y) {
     const float* d = depth.row(y);

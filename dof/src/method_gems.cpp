@@ -274,7 +274,7 @@ void run_gems(Image& out, const Image& color, ConstPlane coc, const DofSettings&
   const TileMap frame(coc, point_below, TileMap::kDefaultTile, 0, team);
   const float top = std::min(frame.max_radius(), kMaxRadius);  // the seed's max blur radius R
   if (top <= 0) {  // every pixel sharp: the input, bit for bit
-    for (int c = 0; c < channels; ++c) copy_plane(color.plane(c), out.plane(c));
+    for (int c = 0; c < channels; ++c) copy_plane(out.plane(c), color.plane(c));
     report.stages.push_back({"classify", seconds_since(start)});
     report.skipped_fraction = settings.skip_in_focus ? 1.0 : 0.0;
     report.notes = "every pixel in focus";
@@ -315,12 +315,12 @@ void run_gems(Image& out, const Image& color, ConstPlane coc, const DofSettings&
   if (nodes.count >= 3) {
     medium.reset(qw, qh, channels);
     for (int c = 0; c < channels; ++c)
-      convolve_separable(mean.plane(c), medium.plane(c), tent, tent, Border::mirror, team);
+      convolve_separable(medium.plane(c), mean.plane(c), tent, tent, Border::mirror, team);
   }
   if (nodes.count == 4) {
     large.reset(qw, qh, channels);
     for (int c = 0; c < channels; ++c)
-      convolve_separable(mean.plane(c), large.plane(c), gaussian, gaussian, Border::mirror,
+      convolve_separable(large.plane(c), mean.plane(c), gaussian, gaussian, Border::mirror,
                          team);
   }
   report.stages.push_back({"medium and large levels", seconds_since(start)});
@@ -329,7 +329,7 @@ void run_gems(Image& out, const Image& color, ConstPlane coc, const DofSettings&
   if (near) {
     start = Clock::now();
     Image blurred(qw, qh, 1), combined(qw, qh, 1);
-    convolve_separable(near_coc.plane(0), blurred.plane(0), gaussian, gaussian,
+    convolve_separable(blurred.plane(0), near_coc.plane(0), gaussian, gaussian,
                        Border::mirror, team);
     for (std::ptrdiff_t j = 0; j < qh; ++j)
       for (std::ptrdiff_t i = 0; i < qw; ++i) {
@@ -337,7 +337,7 @@ void run_gems(Image& out, const Image& color, ConstPlane coc, const DofSettings&
         combined(i, j, 0) = 2.f * std::max(d0, db) - d0;  // seed 002 §28.4.3
       }
     spread.reset(qw, qh, 1);
-    convolve_separable(combined.plane(0), spread.plane(0), tent, tent, Border::mirror, team);
+    convolve_separable(spread.plane(0), combined.plane(0), tent, tent, Border::mirror, team);
     report.stages.push_back({"near coc", seconds_since(start)});
   }
 
@@ -430,7 +430,7 @@ void run_gems(Image& out, const Image& color, ConstPlane coc, const DofSettings&
   }
   if (skip)
     for (int ch = 0; ch < channels; ++ch)
-      copy_unreached_tiles(tiles, color.plane(ch), out.plane(ch), team);
+      copy_unreached_tiles(out.plane(ch), color.plane(ch), tiles, team);
   report.stages.push_back({"blend", seconds_since(start)});
 
   report.skipped_fraction = skip ? 1.0 - tiles.work_fraction() : 0.0;

@@ -493,7 +493,7 @@ void run_poisson(Image& out, const Image& color, ConstPlane coc, const DofSettin
   }
   if (skip)
     for (int ch = 0; ch < channels; ++ch)
-      copy_unreached_tiles(tiles, color.plane(ch), out.plane(ch), team);
+      copy_unreached_tiles(out.plane(ch), color.plane(ch), tiles, team);
   report.stages.push_back({"gather", seconds_since(start)});
 
   report.skipped_fraction = double(copied) / double(width * height);

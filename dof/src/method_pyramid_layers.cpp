@@ -146,9 +146,9 @@ inline float weight(std::int8_t side, Split s, const Layer& layer) {
 // pyramid library's smoothing alone.
 void blur_layer_plane(ConstPlane in, Plane out, double sigma, int threads) {
   if (sigma >= pyramid_sigma(kFilter, 1))
-    pyramid_blur_sigma(in, out, kFilter, sigma, Border::replicate, threads);
+    pyramid_blur_sigma(out, in, kFilter, sigma, Border::replicate, threads);
   else
-    pyramid_blur(in, out, kFilter, 0, sigma, Border::replicate, threads);
+    pyramid_blur(out, in, kFilter, 0, sigma, Border::replicate, threads);
 }
 
 }  // namespace
@@ -327,7 +327,7 @@ void run_pyramid_layers(Image& out, const Image& color, ConstPlane coc,
   }
   if (skip)
     for (int c = 0; c < channels; ++c)
-      copy_unreached_tiles(tiles, color.plane(c), out.plane(c), team);
+      copy_unreached_tiles(out.plane(c), color.plane(c), tiles, team);
   report.stages.push_back({"composite", composite_seconds + seconds_since(start)});
 
   report.skipped_fraction = skip ? 1.0 - tiles.work_fraction() : 0.0;

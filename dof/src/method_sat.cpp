@@ -233,7 +233,7 @@ void for_each_worked_pixel(const TileMap& tiles, bool skip, int team, Image& out
   }
   if (skip)
     for (int c = 0; c < color.channels(); ++c)
-      copy_unreached_tiles(tiles, color.plane(c), out.plane(c), team);
+      copy_unreached_tiles(out.plane(c), color.plane(c), tiles, team);
 }
 
 struct Common {

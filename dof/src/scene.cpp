@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <limits>
 
-#include "tridiff/solvers/solve.hpp"
+#include "tridiff/threads.hpp"
 
 namespace tridiff {
 namespace {
@@ -144,7 +144,7 @@ Scene procedural_scene(std::ptrdiff_t width, std::ptrdiff_t height, int threads)
   scene.lens.f_number = 1.8f;  // a fast lens: a shallow depth of field worth looking at
   // Pinhole: a pixel spans sensor_width / (focal_length * width) on the z = 1 plane.
   const float pixel = scene.lens.sensor_width_mm / (scene.lens.focal_length_mm * float(width));
-  const int team = detail::resolve_threads(threads);
+  const int team = resolve_threads(threads);
 #pragma omp parallel for num_threads(team) schedule(dynamic, 8)
   for (std::ptrdiff_t y = 0; y < height; ++y)
     for (std::ptrdiff_t x = 0; x < width; ++x) {

@@ -10,7 +10,7 @@
 
 #include "tridiff/dof/lens.hpp"
 #include "tridiff/dof/scene.hpp"
-#include "tridiff/solvers/solve.hpp"
+#include "tridiff/threads.hpp"
 
 namespace tridiff {
 namespace {
@@ -69,7 +69,7 @@ DofScene paint(std::string name, std::ptrdiff_t width, std::ptrdiff_t height, in
                PixelFn pixel) {
   DofScene scene{std::move(name), Image(width, height, 3), Image(width, height, 1)};
   const Frame frame{width, height, double(std::min(width, height))};
-  const int team = detail::resolve_threads(threads);
+  const int team = resolve_threads(threads);
 #pragma omp parallel for num_threads(team) schedule(static)
   for (std::ptrdiff_t y = 0; y < height; ++y)
     for (std::ptrdiff_t x = 0; x < width; ++x) {

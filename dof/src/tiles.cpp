@@ -107,7 +107,7 @@ Rect TileMap::rect(std::ptrdiff_t tx, std::ptrdiff_t ty) const {
   return {x, y, std::min(tile_, width_ - x), std::min(tile_, height_ - y)};
 }
 
-void copy_unreached_tiles(const TileMap& tiles, ConstPlane in, Plane out, int threads) {
+void copy_unreached_tiles(Plane out, ConstPlane in, const TileMap& tiles, int threads) {
   if (in.width() != tiles.width() || in.height() != tiles.height() ||
       out.width() != tiles.width() || out.height() != tiles.height())
     throw InvalidArgument("out", -1, -1, "planes must have the tile map's size");

@@ -4,7 +4,7 @@
 
 #include <algorithm>
 
-#include "tridiff/solvers/solve.hpp"  // detail::resolve_threads: one meaning of `threads`
+#include "tridiff/threads.hpp"
 
 namespace tridiff {
 namespace {
@@ -14,7 +14,7 @@ namespace {
 // touched.
 template <class Curve>
 void apply_to_colour_planes(Image& image, int threads, Curve curve) {
-  const int team = detail::resolve_threads(threads);
+  const int team = resolve_threads(threads);
   if (image.empty()) return;
   const std::ptrdiff_t width = image.width(), height = image.height(), pitch = image.pitch();
   const std::ptrdiff_t rows = std::min(3, image.channels()) * height;

@@ -21,6 +21,7 @@
 
 #include "tridiff/image/color.hpp"
 #include "tridiff/image/output_files.hpp"
+#include "tridiff/threads.hpp"
 
 namespace tridiff {
 namespace {
@@ -536,11 +537,12 @@ int color_plane_count(int channels) { return channels == 2 ? 1 : std::min(3, cha
 
 // The planes interleaved as T, each value passed through store(value, is_colour_plane).
 template <class T, class Store>
-std::vector<T> interleave(const Image& image, Store store) {
+std::vector<T> interleave(const Image& image, int threads, Store store) {
+  const int team = resolve_threads(threads);
   const std::ptrdiff_t width = image.width(), height = image.height();
   const int channels = image.channels(), colour = color_plane_count(channels);
   std::vector<T> pixels(static_cast<std::size_t>(width * height * channels));
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for num_threads(team) schedule(static) if (team > 1)
   for (std::ptrdiff_t y = 0; y < height; ++y) {
     for (int c = 0; c < channels; ++c) {
       const float* row = image.plane(c).row(y);
@@ -553,9 +555,9 @@ std::vector<T> interleave(const Image& image, Store store) {
 
 // sRGB-encodes (when asked) and rounds to T's full range; NaN and negatives become 0.
 template <class T>
-std::vector<T> quantise(const Image& image, bool srgb) {
+std::vector<T> quantise(const Image& image, bool srgb, int threads) {
   constexpr float kMax = static_cast<float>(std::numeric_limits<T>::max());
-  return interleave<T>(image, [srgb](float value, bool colour) {
+  return interleave<T>(image, threads, [srgb](float value, bool colour) {
     if (srgb && colour) value = linear_to_srgb(value);
     if (!(value > 0.f)) return T(0);
     return static_cast<T>(std::min(value, 1.f) * kMax + 0.5f);
@@ -596,9 +598,8 @@ std::vector<unsigned char> encode(const std::string& path, const OIIO::ImageSpec
   return bytes;
 }
 
-ColorImage read_color_image(const std::string& path, ColorEncoding encoding,
-                            std::int64_t max_pixels) {
-  const auto input = open_input(path, max_pixels);
+ColorImage read_color_image(const std::string& path, const ReadOptions& options) {
+  const auto input = open_input(path, options.max_pixels);
   const OIIO::ImageSpec& spec = input->spec();
   const ColorChannels chosen = choose_color_channels(spec);
 
@@ -625,9 +626,10 @@ ColorImage read_color_image(const std::string& path, ColorEncoding encoding,
   if (chosen.alpha >= 0) copy(chosen.alpha, 3);
 
   const ColorEncoding held =
-      encoding == ColorEncoding::Auto ? detect_encoding(spec, chosen.rgb[0]) : encoding;
+      options.encoding == ColorEncoding::Auto ? detect_encoding(spec, chosen.rgb[0])
+                                              : options.encoding;
   if (held == ColorEncoding::Srgb) {
-    srgb_to_linear(image);
+    srgb_to_linear(image, options.threads);
     // Float data forced through the sRGB curve overflows it above about 1e16.
     if (spec.format.is_floating_point())
       for (int c = 0; c < 3; ++c)
@@ -662,8 +664,9 @@ Image read_depth_image(const std::string& path, const DepthOptions& options) {
 
 // ---------------------------------------------------------------------------------------------
 
-ColorImage read_color(const std::string& path, ColorEncoding encoding, std::int64_t max_pixels) {
-  return with_memory_named(path, [&] { return read_color_image(path, encoding, max_pixels); });
+ColorImage read_color(const std::string& path, const ReadOptions& options) {
+  resolve_threads(options.threads);  // a bad count is refused before the file is opened
+  return with_memory_named(path, [&] { return read_color_image(path, options); });
 }
 
 Image read_depth(const std::string& path, const DepthOptions& options) {
@@ -672,24 +675,26 @@ Image read_depth(const std::string& path, const DepthOptions& options) {
 void check_image_path(const std::string& path) { check_path(path, extension_of(path)); }
 
 std::vector<unsigned char> encode_image(const std::string& path, const Image& image,
-                                        ColorEncoding encoding) {
+                                        const WriteOptions& options) {
+  resolve_threads(options.threads);
   const std::string extension = extension_of(path);
   check_output(path, extension, image);
-  const OutputFormat format = choose_output_format(extension, image, encoding);
+  const OutputFormat format = choose_output_format(extension, image, options.encoding);
   const OIIO::ImageSpec spec = output_spec(image, format, extension);
   if (format.type == OIIO::TypeDesc::UINT8)
-    return encode(path, spec, format.type, quantise<std::uint8_t>(image, format.srgb).data());
+    return encode(path, spec, format.type, quantise<std::uint8_t>(image, format.srgb, options.threads).data());
   if (format.type == OIIO::TypeDesc::UINT16)
-    return encode(path, spec, format.type, quantise<std::uint16_t>(image, format.srgb).data());
+    return encode(path, spec, format.type, quantise<std::uint16_t>(image, format.srgb, options.threads).data());
   // Float formats take linear values as they are; the writer rounds to half when asked.
-  const auto pixels = interleave<float>(image, [](float value, bool) { return value; });
+  const auto pixels =
+      interleave<float>(image, options.threads, [](float value, bool) { return value; });
   return encode(path, spec, OIIO::TypeDesc::FLOAT, pixels.data());
 }
 
-void write_image(const std::string& path, const Image& image, ColorEncoding encoding) {
+void write_image(const std::string& path, const Image& image, const WriteOptions& options) {
   OutputFiles file;
   file.claim("", path);
-  file.stage("", encode_image(path, image, encoding));
+  file.stage("", encode_image(path, image, options));
   file.commit();
 }
 

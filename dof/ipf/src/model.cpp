@@ -10,7 +10,7 @@
 #include <string>
 #include <utility>
 
-#include "tridiff/solvers/solve.hpp"
+#include "tridiff/threads.hpp"
 
 namespace tridiff::ipf {
 namespace {
@@ -120,7 +120,7 @@ PartCounts run_part(const FramePlan& plan, const Part& part, const Program& prog
 template <class Program>
 RunCounts run_frame(const FramePlan& plan, const Program& program, int threads) {
   std::vector<PartCounts> parts(plan.parts.size());
-  const int team = tridiff::detail::resolve_threads(threads);
+  const int team = resolve_threads(threads);
 #pragma omp parallel for num_threads(team) schedule(dynamic)
   for (std::size_t p = 0; p < plan.parts.size(); ++p)
     parts[p] = run_part(plan, plan.parts[p], program);
@@ -225,7 +225,7 @@ void require_lanes(const Image& color) {
 }  // namespace
 
 ModelCost model_cost(const FramePlan& plan, int threads) {
-  const int team = tridiff::detail::resolve_threads(threads);
+  const int team = resolve_threads(threads);
   const double n = plan.mask;
   ModelCost cost;
   double largest_part = 0;

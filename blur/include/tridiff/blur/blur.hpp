@@ -10,6 +10,7 @@
 #include <string_view>
 
 #include "tridiff/image/image.hpp"
+#include "tridiff/threads.hpp"
 
 namespace tridiff {
 
@@ -34,14 +35,14 @@ struct BorderSet {
 // border. Any i, however far outside: a kernel may be wider than the image.
 std::ptrdiff_t border_index(std::ptrdiff_t i, std::ptrdiff_t n, Border border);
 
-struct BlurSettings {
+struct BlurOptions {
   double sigma = 1;                 // the target Gaussian's standard deviation, in pixels
   Border border = Border::replicate;
   int threads = 0;                  // 0: all cores
 };
 
 // out = blur of `in`. The views have the same size and do not overlap.
-using BlurRun = void (*)(ConstPlane in, Plane out, const BlurSettings& settings);
+using BlurRun = void (*)(Plane out, ConstPlane in, const BlurOptions& options);
 
 struct BlurMethod {
   std::string_view name;
@@ -62,13 +63,8 @@ const BlurMethod& find_blur_method(std::string_view name);
 
 // Checks the arguments (sizes, overlap, sigma in the method's range and finite, the border,
 // threads >= 0: InvalidArgument naming the one at fault) and runs the method.
-void blur(const BlurMethod& method, ConstPlane in, Plane out, const BlurSettings& settings);
+void blur(Plane out, ConstPlane in, const BlurMethod& method, const BlurOptions& options);
 // Every channel of `in`; out is reallocated to in's size when it differs.
-void blur(const BlurMethod& method, const Image& in, Image& out, const BlurSettings& settings);
-
-namespace blur_detail {
-// The thread count a method should use (settings.threads, 0 meaning all cores).
-int threads_of(const BlurSettings& settings);
-}  // namespace blur_detail
+void blur(Image& out, const Image& in, const BlurMethod& method, const BlurOptions& options);
 
 }  // namespace tridiff

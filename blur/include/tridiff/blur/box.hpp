@@ -45,7 +45,7 @@ struct BoxPass {
 // what the later passes read, rather than clamping at every pass). Boxes may be wider than
 // the image. `in` and `out` have the same size and may be the same plane, but
 // must not otherwise overlap. threads 0: all cores.
-void box_passes(ConstPlane in, Plane out, std::span<const BoxPass> passes, int threads = 0);
+void box_passes(Plane out, ConstPlane in, std::span<const BoxPass> passes, int threads = 0);
 
 // The plain box passes for box_widths(sigma, passes).
 std::vector<BoxPass> plain_box_passes(double sigma, int passes = kDefaultBoxPasses);

@@ -10,10 +10,10 @@ namespace tridiff {
 // Forward-Euler steps: N = ceil(2 sigma^2) steps of conductance c = sigma^2 / (2 N) <= 1/4
 // (the stability bound), through diffuse_isotropic. Cost O(pixels sigma^2).
 int explicit_diffusion_steps(double sigma);
-void explicit_diffusion_blur(ConstPlane in, Plane out, double sigma, int threads = 0);
+void explicit_diffusion_blur(Plane out, ConstPlane in, double sigma, int threads = 0);
 
 // `steps` ADI steps (one tridiagonal solve per row and per column each) of conductance
 // beta = sigma^2 / (2 steps), through diffuse_adi. Stable for every sigma; cost O(pixels steps).
-void implicit_diffusion_blur(ConstPlane in, Plane out, double sigma, int steps, int threads = 0);
+void implicit_diffusion_blur(Plane out, ConstPlane in, double sigma, int steps, int threads = 0);
 
 }  // namespace tridiff

@@ -69,26 +69,26 @@ Kernel2D bilinear_box_kernel_2d();
 // rows per thread, then the column pass; no full-size temporary). Symmetric kernels take half
 // the multiplications. O(pixels (|kx| + |ky|)). Every output row is computed the same way
 // whatever the thread count: the result does not depend on `threads`.
-void convolve_separable(ConstPlane in, Plane out, std::span<const float> kx,
+void convolve_separable(Plane out, ConstPlane in, std::span<const float> kx,
                         std::span<const float> ky, Border border, int threads = 0);
 
 // out = in convolved with a 2D kernel, summed tap by tap. O(pixels |kernel|).
-void convolve_2d(ConstPlane in, Plane out, const Kernel2D& kernel, Border border,
+void convolve_2d(Plane out, ConstPlane in, const Kernel2D& kernel, Border border,
                  int threads = 0);
 
 // The same two convolutions through the FFT (blur/src/fft_convolve.cpp): single-precision
 // FFTW, the plane padded by the kernel radius with the border rule (replicate, mirror, zero) or
 // not padded at all (periodic), to sizes 2^a 3^b 5^c 7^d. The cost does not depend on the
 // kernel size, only on the padded size: O(N log N).
-void fft_convolve_separable(ConstPlane in, Plane out, std::span<const float> kx,
+void fft_convolve_separable(Plane out, ConstPlane in, std::span<const float> kx,
                             std::span<const float> ky, Border border, int threads = 0);
-void fft_convolve(ConstPlane in, Plane out, const Kernel2D& kernel, Border border,
+void fft_convolve(Plane out, ConstPlane in, const Kernel2D& kernel, Border border,
                   int threads = 0);
 
 namespace blur_detail {
 // The argument checks the functions above share: in non-empty, out the same size and not
 // overlapping in, threads >= 0.
-void check_convolution_planes(ConstPlane in, ConstPlane out, int threads);
+void check_convolution_planes(ConstPlane out, ConstPlane in, int threads);
 // `kernel` (named `name` in the error) is non-empty, of odd length and finite.
 void check_kernel(std::span<const float> kernel, const char* name);
 void check_kernel(const Kernel2D& kernel, const char* name);

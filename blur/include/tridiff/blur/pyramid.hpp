@@ -46,9 +46,9 @@ std::string_view pyramid_filter_name(PyramidFilter filter);
 // `coarse_sigma` coarse pixels at the coarsest level (0: none; see pyramid_plan). `in` and `out`
 // have the same size and do not overlap. InvalidArgument on bad sizes, levels outside [0, 30],
 // coarse_sigma < 0 or not finite, a border other than replicate, threads < 0 (0: all cores).
-void pyramid_blur(ConstPlane in, Plane out, PyramidFilter filter, int levels,
+void pyramid_blur(Plane out, ConstPlane in, PyramidFilter filter, int levels,
                   Border border = Border::replicate, int threads = 0);
-void pyramid_blur(ConstPlane in, Plane out, PyramidFilter filter, int levels,
+void pyramid_blur(Plane out, ConstPlane in, PyramidFilter filter, int levels,
                   double coarse_sigma, Border border, int threads);
 
 // The effective sigma of `levels` levels (>= 1) of `filter`, in input pixels: the sigma of the
@@ -75,7 +75,7 @@ PyramidPlan pyramid_plan(PyramidFilter filter, double sigma);
 
 // pyramid_blur at pyramid_plan(filter, sigma): the registered methods "pyramid-box2",
 // "pyramid-box4" and "pyramid-quasi".
-void pyramid_blur_sigma(ConstPlane in, Plane out, PyramidFilter filter, double sigma,
+void pyramid_blur_sigma(Plane out, ConstPlane in, PyramidFilter filter, double sigma,
                         Border border = Border::replicate, int threads = 0);
 
 }  // namespace tridiff

@@ -25,9 +25,9 @@ struct BlurError {
 BlurError blur_error(ConstPlane approx, const DoublePlane& exact);
 
 // A blur of one plane, for the harness: out = blur(in).
-using PlaneBlur = std::function<void(ConstPlane in, Plane out)>;
-// One registered method at `settings`, as a PlaneBlur.
-PlaneBlur plane_blur(const BlurMethod& method, const BlurSettings& settings);
+using PlaneBlur = std::function<void(Plane out, ConstPlane in)>;
+// One registered method at `options`, as a PlaneBlur.
+PlaneBlur plane_blur(const BlurMethod& method, const BlurOptions& options);
 
 // The l-infinity operator norm of (blur - exact Gaussian of sigma), for a linear shift-
 // invariant blur: the l1 norm of the difference of their impulse responses, the impulse in the

@@ -48,13 +48,13 @@ ReshuffledKernel reshuffle_kernel(std::span<const double> kernel, std::ptrdiff_t
 
 // out = in convolved with the 2D kernel (Algorithm 3.2, every output written once). Any
 // border; out must not overlap in. O(pixels * taps).
-void reshuffle_filter(ConstPlane in, Plane out, const ReshuffledKernel& kernel, Border border,
+void reshuffle_filter(Plane out, ConstPlane in, const ReshuffledKernel& kernel, Border border,
                       int threads = 0);
 
 // out = in convolved with the 1D kernel (height 1) along rows, then along columns: the
 // separable use of a 1D kernel k, the 2D kernel being k(x) k(y). O(pixels * 2 taps).
 // InvalidArgument("kernel") unless the kernel is 1D.
-void reshuffle_filter_separable(ConstPlane in, Plane out, const ReshuffledKernel& kernel,
+void reshuffle_filter_separable(Plane out, ConstPlane in, const ReshuffledKernel& kernel,
                                 Border border, int threads = 0);
 
 }  // namespace tridiff

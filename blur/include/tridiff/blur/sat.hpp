@@ -85,9 +85,9 @@ class TiledFloatSummedAreaTable {
 // out(x, y) = the mean of the (2 radius_x + 1) x (2 radius_y + 1) box around (x, y) of the
 // table's image, replicate border (boxes may be wider than the image). `out` has the table's
 // size. Any radius >= 0. For a box size varying per pixel, use replicate_box_sum directly.
-void sat_box_filter(const SummedAreaTable& table, Plane out, std::ptrdiff_t radius_x,
+void sat_box_filter(Plane out, const SummedAreaTable& table, std::ptrdiff_t radius_x,
                     std::ptrdiff_t radius_y, int threads = 0);
-void sat_box_filter(const TiledFloatSummedAreaTable& table, Plane out, std::ptrdiff_t radius_x,
+void sat_box_filter(Plane out, const TiledFloatSummedAreaTable& table, std::ptrdiff_t radius_x,
                     std::ptrdiff_t radius_y, int threads = 0);
 
 }  // namespace tridiff

@@ -41,7 +41,7 @@ SpreadingKernel spreading_kernel_for_sigma(double sigma);
 // out = in convolved with K(x) K(y). Borders: replicate (pixels beyond the edge repeat the edge
 // pixel, added in closed form from the kernel's tail sums) or zero; others throw
 // InvalidArgument("border"). O(pixels) whatever the radius; threads 0 means all cores.
-void polynomial_spread(ConstPlane in, Plane out, const SpreadingKernel& kernel, Border border,
+void polynomial_spread(Plane out, ConstPlane in, const SpreadingKernel& kernel, Border border,
                        int threads = 0);
 
 }  // namespace tridiff

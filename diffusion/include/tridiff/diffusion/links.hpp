@@ -32,8 +32,8 @@ class LinkField {
 
   // Recomputes which tiles hold a non-zero link; call after writing the planes. Also checks
   // every link is finite and >= 0 (InvalidArgument naming the link otherwise) and zeroes the
-  // border links.
-  void finish();
+  // border links. OpenMP over tiles with `threads` (0: all cores).
+  void finish(int threads = 0);
 
   // What finish() does, for a builder that checked its links and found the largest of each
   // tile (tile (tx, ty) at ty * tiles_x() + tx) while writing them.

@@ -92,6 +92,6 @@ class TileMap {
 
 // Copies `in` to `out` (same size) on the tiles that need no work; the other tiles are left as
 // they are. Every method's last step. `threads`: 0 = all cores.
-void copy_unreached_tiles(const TileMap& tiles, ConstPlane in, Plane out, int threads = 0);
+void copy_unreached_tiles(Plane out, ConstPlane in, const TileMap& tiles, int threads = 0);
 
 }  // namespace tridiff

@@ -161,7 +161,7 @@ class Image {
 };
 
 // dst = src, pixel for pixel; the views must have the same size.
-inline void copy_plane(ConstPlane src, Plane dst) {
+inline void copy_plane(Plane dst, ConstPlane src) {
   if (src.width() != dst.width() || src.height() != dst.height())
     throw InvalidArgument("dst", -1, -1, "size differs from src");
   for (std::ptrdiff_t y = 0; y < src.height(); ++y)

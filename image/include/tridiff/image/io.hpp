@@ -35,14 +35,19 @@ struct ColorImage {
 // gigapixel image); a caller with the memory raises it per call.
 inline constexpr std::int64_t kDefaultMaxPixels = std::int64_t(1) << 28;
 
+struct ReadOptions {
+  ColorEncoding encoding = ColorEncoding::Auto;  // Auto: from the file's metadata
+  std::int64_t max_pixels = kDefaultMaxPixels;   // larger files are refused before reading
+  int threads = 0;                               // for the sRGB decoding; 0: all cores
+};
+
 // Reads the colour channels of `path` (R, G, B[, A]; a one-channel file is grey and is
 // expanded to RGB) and converts them to linear light. Every value read is finite: a NaN or an
 // infinity in the file (only half and float data can hold one) is an ImageIoError naming the
-// file, the pixel and the channel. A file of more than `max_pixels` pixels, a damaged or
+// file, the pixel and the channel. A file of more than `options.max_pixels` pixels, a damaged or
 // truncated file (also one whose reader fills the missing part with black) and a file too
 // large for the memory are ImageIoErrors naming it.
-ColorImage read_color(const std::string& path, ColorEncoding encoding = ColorEncoding::Auto,
-                      std::int64_t max_pixels = kDefaultMaxPixels);
+ColorImage read_color(const std::string& path, const ReadOptions& options = {});
 
 // How the values of a depth channel map to distance from the camera.
 enum class DepthConvention {
@@ -66,16 +71,20 @@ struct DepthOptions {
 // the error names the file, channel and pixel. Limits and damage as for read_color.
 Image read_depth(const std::string& path, const DepthOptions& options = {});
 
+struct WriteOptions {
+  ColorEncoding encoding = ColorEncoding::Auto;  // Linear: integer formats store linear values
+  int threads = 0;                               // for the sRGB encoding; 0: all cores
+};
+
 // The bytes of `image` (linear light) encoded in the format of `path`'s extension (.png .jpg
 // .tif .exr ...); nothing is written. Integer formats are sRGB-encoded and quantised unless
-// `encoding` is Linear; float formats (.exr, .hdr) keep linear values.
+// `options.encoding` is Linear; float formats (.exr, .hdr) keep linear values.
 std::vector<unsigned char> encode_image(const std::string& path, const Image& image,
-                                        ColorEncoding encoding = ColorEncoding::Auto);
+                                        const WriteOptions& options = {});
 
 // encode_image, then the file written as an OutputFiles set of one (output_files.hpp): whole
 // or not at all, a full disk an error, and never over a folder or a special file.
-void write_image(const std::string& path, const Image& image,
-                 ColorEncoding encoding = ColorEncoding::Auto);
+void write_image(const std::string& path, const Image& image, const WriteOptions& options = {});
 
 // Refuses (ImageIoError naming the file) a path whose format encode_image cannot write
 // whatever the image: no extension, a format OpenImageIO has no writer for or cannot encode

@@ -25,6 +25,7 @@
 #include "tridiff/solvers/detail/workspace.hpp"
 #include "tridiff/solvers/error.hpp"
 #include "tridiff/solvers/layout.hpp"
+#include "tridiff/threads.hpp"
 
 namespace tridiff {
 
@@ -57,14 +58,9 @@ inline bool is_pivot_free(Method method) {
   return method != Method::Auto && method != Method::Pivoting;
 }
 
-// The most threads any call of the library accepts (`threads` above it is InvalidArgument):
-// a team of tens of thousands overflows the OpenMP runtime's stacks or the process table long
-// before it could help, and no machine this library targets has more than a few hundred cores.
-inline constexpr int kMaxThreads = 1024;
-
 struct SolveOptions {
   Method method = Method::Auto;
-  int threads = 0;         // 0: the OpenMP default (all cores); at most kMaxThreads
+  int threads = 0;         // 0: all cores; at most kMaxThreads (tridiff/threads.hpp)
   bool periodic = false;   // sub[0] is entry (0, n-1) and super[n-1] entry (n-1, 0)
   // The pivot-free methods are stable only for diagonally dominant matrices (by rows or by
   // columns). With this set they refuse other matrices (NumericalError naming system and row);
@@ -93,23 +89,6 @@ inline constexpr int kLanes = static_cast<int>(256 / sizeof(T));
 template <class T>
 inline bool fills_lanes(std::ptrdiff_t systems) {
   return 4 * systems >= kLanes<T>;
-}
-
-// The one place a `threads` argument of the library becomes a team size: 0 is the OpenMP
-// default (all cores, at most kMaxThreads); negative and more than kMaxThreads are
-// InvalidArgument("threads").
-inline int resolve_threads(int threads) {
-  if (threads < 0) throw InvalidArgument("threads", -1, -1, "must be >= 0 (0: all cores)");
-  if (threads > kMaxThreads)
-    throw InvalidArgument("threads", -1, -1,
-                          "must be at most " + std::to_string(kMaxThreads) + ", got " +
-                              std::to_string(threads));
-#ifdef _OPENMP
-  // 0 follows OMP_NUM_THREADS, which nothing else bounds.
-  return threads == 0 ? std::min(omp_get_max_threads(), kMaxThreads) : threads;
-#else
-  return 1;
-#endif
 }
 
 template <class T>

@@ -351,7 +351,7 @@ DiffusionReport run_pass(Direction direction, const PlaneStack<float>& dst,
   const bool in_place = dst.data == src.data;
   std::vector<std::ptrdiff_t> solved(bands, 0);
 
-  for_each_band(bands, detail::resolve_threads(options.threads),
+  for_each_band(bands, resolve_threads(options.threads),
                 [&](std::ptrdiff_t band, BandScratch& scratch) {
     const std::ptrdiff_t first = band * kTile;  // first row (rows) or column (columns)
     const std::ptrdiff_t count = std::min(kTile, (rows ? height : width) - first);
@@ -444,7 +444,7 @@ class PixelConductance {
         tiles_y_((value.height() + kTile - 1) / kTile),
         conducting_(tiles_x_ * tiles_y_, 0) {
     bool bad = false;
-#pragma omp parallel for num_threads(detail::resolve_threads(threads)) schedule(dynamic, 1) \
+#pragma omp parallel for num_threads(resolve_threads(threads)) schedule(dynamic, 1) \
     reduction(|| : bad) if (tiles_y_ > 1)
     for (std::ptrdiff_t ty = 0; ty < tiles_y_; ++ty) bad = scan_tile_row(ty) || bad;
     if (bad) throw_bad_conductance(value_, to_link_);  // names the first bad pixel

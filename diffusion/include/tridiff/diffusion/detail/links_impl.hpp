@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "tridiff/solvers/solve.hpp"  // resolve threads the same way as the solvers
+#include "tridiff/threads.hpp"
 
 namespace tridiff {
 
@@ -32,7 +32,7 @@ LinkField links_from_pixels(ConstPlane value, ToLink to_link, int threads) {
   const std::ptrdiff_t width = value.width(), height = value.height();
   LinkField links(width, height);
   Plane horizontal = links.horizontal(), vertical = links.vertical();
-  const int team = detail::resolve_threads(threads);
+  const int team = resolve_threads(threads);
   constexpr std::ptrdiff_t tile = LinkField::kTile;
   const std::ptrdiff_t tiles_x = links.tiles_x();
   // Per tile: the largest horizontal and vertical link, found while the links are written.
