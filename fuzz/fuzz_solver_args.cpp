@@ -497,7 +497,10 @@ Pointers<T> pointers(Batch<T>& b, const Call& call) {
 // Whether the solver must refuse the call with InvalidArgument, whatever the values.
 template <class T>
 bool must_refuse(const Batch<T>& b, const Call& call, const Pointers<T>& p) {
-  if (!b.valid || call.options.threads < 0 || !p.rhs || !p.x) return true;
+  const int method = static_cast<int>(call.options.method);
+  if (!b.valid || call.options.threads < 0 || method < 0 || method >= int(std::size(kMethodTable)))
+    return true;
+  if (!p.rhs || !p.x) return true;
   if (call.diffusion) return !p.beta || p.x == static_cast<const void*>(p.beta);
   return !p.sub || !p.diag || !p.super || p.x == p.sub || p.x == p.diag || p.x == p.super;
 }

@@ -986,6 +986,22 @@ TEST(Diffusion, LinksFinishNamesTheBadLink) {
   }
 }
 
+// finish() runs on the caller's threads: the result does not depend on how many, and a bad
+// count is refused.
+TEST(LinkFieldErrors, FinishObeysThreads) {
+  LinkField one = random_links({130, 70}, 1.f, 0.3, 5);
+  LinkField two = one;
+  one.finish(1);
+  two.finish(2);
+  EXPECT_EQ(one.max_link(), two.max_link());
+  for (std::ptrdiff_t ty = 0; ty < one.tiles_y(); ++ty)
+    for (std::ptrdiff_t tx = 0; tx < one.tiles_x(); ++tx) {
+      EXPECT_EQ(one.horizontal_active(tx, ty), two.horizontal_active(tx, ty));
+      EXPECT_EQ(one.vertical_active(tx, ty), two.vertical_active(tx, ty));
+    }
+  EXPECT_EQ(invalid_argument_of([&] { two.finish(-1); }).argument, "threads");
+}
+
 // ---------------------------------------------------------------------------------------------
 // 11. A non-finite pixel is reported with its image coordinates: by the solver when it lies in
 // a solved segment (the error's system and row mapped back to the image), by the copy when it

@@ -227,6 +227,24 @@ TEST_F(ImageIo, Tiff16RoundTripWithinQuantisationStep) {
   expect_encoded_within(image, read.pixels, 1.f / 65535.f);
 }
 
+// The sRGB encoding and decoding run on `threads`: the bytes and the pixels do not depend on
+// how many, and a bad count is refused before any file is touched.
+TEST_F(ImageIo, ThreadsChangeNothingAndBadCountsAreRefused) {
+  const Image image = random_image(37, 29, 4, 0.f, 1.f, 11);
+  const auto one = encode_image(file("t.png"), image, {.threads = 1});
+  EXPECT_EQ(encode_image(file("t.png"), image, {.threads = 2}), one);
+  write_image(file("t.png"), image, {.threads = 2});
+  const ColorImage a = read_color(file("t.png"), {.threads = 1});
+  const ColorImage b = read_color(file("t.png"), {.threads = 2});
+  EXPECT_EQ(image_difference(a.pixels, b.pixels).max, 0.0);
+  EXPECT_EQ(invalid_argument_of([&] { encode_image(file("u.png"), image, {.threads = -1}); })
+                .argument,
+            "threads");
+  EXPECT_EQ(invalid_argument_of([&] { read_color(file("t.png"), {.threads = -1}); }).argument,
+            "threads");
+  EXPECT_FALSE(std::filesystem::exists(file("u.png")));
+}
+
 TEST_F(ImageIo, Png8RoundTripWithinQuantisationStep) {
   Image image = random_image(31, 6, 4, 0.f, 1.f, 4);
   image(5, 2, 3) = 0.f;  // fully transparent, yet its colour must survive

@@ -861,5 +861,44 @@ TEST(ErrorMessages, NumericalErrorLeavesOutUnknownIndices) {
                "tridiff: argument 'n': must be >= 1");
 }
 
+// The method table: every Method once, names unique and found again by method_named, an
+// unknown name refused with the list, an out-of-range Method refused by both entry points.
+TEST(SolverMethodTable, EveryMethodOnceAndByName) {
+  ASSERT_EQ(std::size(kMethodTable), 6u);
+  for (std::size_t i = 0; i < std::size(kMethodTable); ++i) {
+    EXPECT_EQ(static_cast<std::size_t>(kMethodTable[i].method), i) << "rows in enum order";
+    EXPECT_EQ(method_named(kMethodTable[i].name), kMethodTable[i].method);
+    EXPECT_EQ(std::string(to_string(kMethodTable[i].method)), kMethodTable[i].name);
+  }
+  EXPECT_FALSE(is_pivot_free(Method::Auto));
+  EXPECT_FALSE(is_pivot_free(Method::Pivoting));
+  EXPECT_TRUE(is_pivot_free(Method::Hybrid));
+  try {
+    method_named("hybrid");
+    ADD_FAILURE() << "no error";
+  } catch (const InvalidArgument& e) {
+    EXPECT_EQ(e.argument(), "method");
+    EXPECT_NE(std::string(e.what()).find("known: auto, thomas, cr, pcr, cr-pcr, pivoting"),
+              std::string::npos)
+        << e.what();
+  }
+  const double one[1] = {1}, beta[1] = {0}, rhs[1] = {2};
+  double x[1] = {0};
+  SolveOptions bad;
+  bad.method = static_cast<Method>(17);
+  for (bool diffusion : {false, true}) {
+    try {
+      if (diffusion)
+        solve_diffusion(beta, rhs, x, BatchLayout::single(1), bad);
+      else
+        solve(one, one, one, rhs, x, BatchLayout::single(1), bad);
+      ADD_FAILURE() << "no error, diffusion " << diffusion;
+    } catch (const InvalidArgument& e) {
+      EXPECT_EQ(e.argument(), "method") << e.what();
+    }
+  }
+  EXPECT_EQ(x[0], 0) << "nothing written";
+}
+
 }  // namespace
 }  // namespace tridiff::test

@@ -3,12 +3,14 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <exception>
 #include <limits>
 #include <mutex>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #ifdef _OPENMP
@@ -38,24 +40,73 @@ enum class Method {
   Pivoting,                 // partial pivoting, the algorithm of LAPACK ?gtsv
 };
 
-inline const char* to_string(Method method) {
-  switch (method) {
-    case Method::Auto: return "auto";
-    case Method::Thomas: return "thomas";
-    case Method::CyclicReduction: return "cr";
-    case Method::ParallelCyclicReduction: return "pcr";
-    case Method::Hybrid: return "cr-pcr";
-    case Method::Pivoting: return "pivoting";
-  }
-  return "unknown";
+// The solver methods, one row each: the name the command line, the benchmarks and the error
+// messages use, whether the method pivots, and what it is. Adding a method is its kernel header
+// (detail/), one row here, and one case in detail::solve_one.
+struct MethodRow {
+  Method method;
+  const char* name;
+  bool pivot_free;  // stable only for diagonally dominant matrices (SolveOptions::check_dominance)
+  const char* summary;
+};
+
+inline constexpr MethodRow kMethodTable[] = {
+    {.method = Method::Auto,
+     .name = "auto",
+     .pivot_free = false,
+     .summary = "Thomas (SIMD lanes) for diagonally dominant systems, pivoting for the rest"},
+    {.method = Method::Thomas,
+     .name = "thomas",
+     .pivot_free = true,
+     .summary = "elimination without pivoting; batches run one SIMD lane per system"},
+    {.method = Method::CyclicReduction,
+     .name = "cr",
+     .pivot_free = true,
+     .summary = "odd-even cyclic reduction (seed 000 §3.5.3), any n"},
+    {.method = Method::ParallelCyclicReduction,
+     .name = "pcr",
+     .pivot_free = true,
+     .summary = "parallel cyclic reduction: every row reduced at once, log2(n) steps"},
+    {.method = Method::Hybrid,
+     .name = "cr-pcr",
+     .pivot_free = true,
+     .summary = "cyclic reduction down to hybrid_pcr_below rows, finished by PCR"},
+    {.method = Method::Pivoting,
+     .name = "pivoting",
+     .pivot_free = false,
+     .summary = "partial pivoting, the algorithm of LAPACK ?gtsv"},
+};
+
+inline constexpr auto kAllMethods = [] {
+  std::array<Method, std::size(kMethodTable)> methods{};
+  for (std::size_t i = 0; i < methods.size(); ++i) methods[i] = kMethodTable[i].method;
+  return methods;
+}();
+
+inline const MethodRow& method_row(Method method) {
+  for (const MethodRow& row : kMethodTable)
+    if (row.method == method) return row;
+  throw InvalidArgument("method", -1, -1,
+                        "is not a Method (" + std::to_string(static_cast<int>(method)) + ")");
 }
 
-inline constexpr Method kAllMethods[] = {Method::Auto, Method::Thomas, Method::CyclicReduction,
-                                         Method::ParallelCyclicReduction, Method::Hybrid,
-                                         Method::Pivoting};
+inline const char* to_string(Method method) {
+  for (const MethodRow& row : kMethodTable)
+    if (row.method == method) return row.name;
+  return "unknown";  // for messages about a bad value: never throws
+}
 
-inline bool is_pivot_free(Method method) {
-  return method != Method::Auto && method != Method::Pivoting;
+inline bool is_pivot_free(Method method) { return method_row(method).pivot_free; }
+
+// The method called `name` ("thomas", "cr-pcr", ...); InvalidArgument listing the names otherwise.
+inline Method method_named(std::string_view name) {
+  std::string known;
+  for (const MethodRow& row : kMethodTable) {
+    if (row.name == name) return row.method;
+    known += (known.empty() ? "" : ", ") + std::string(row.name);
+  }
+  throw InvalidArgument("method", -1, -1,
+                        "unknown solver method '" + std::string(name) + "' (known: " + known + ")");
 }
 
 struct SolveOptions {
@@ -407,7 +458,7 @@ SolveReport solve(const T* sub, const T* diag, const T* super, const T* rhs, T* 
   require_disjoint(super, "super", x, layout, false);
   require_disjoint(rhs, "rhs", x, layout, true);
   const int threads = resolve_threads(options.threads);
-  const Method method = options.method;
+  const Method method = method_row(options.method).method;  // an out-of-range value is refused
   const Method fast = method == Method::Auto ? Method::Thomas : method;
   const bool check = method == Method::Auto || (options.check_dominance && is_pivot_free(method));
   constexpr int W = kLanes<T>;
@@ -479,6 +530,7 @@ SolveReport solve_diffusion(const real_t<T>* beta, const T* rhs, T* x, const Bat
   require_disjoint(beta, "beta", x, layout, false);
   require_disjoint(rhs, "rhs", x, layout, true);
   const int threads = resolve_threads(options.threads);
+  method_row(options.method);  // an out-of-range value is refused
   const Method fast = options.method == Method::Auto ? Method::Thomas : options.method;
   constexpr int W = kLanes<T>;
   const bool lanes = fast == Method::Thomas && !options.periodic;
