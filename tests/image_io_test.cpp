@@ -797,8 +797,7 @@ TEST_F(ImageIo, ManyChannelsCostNoMemoryInProportion) {
   EXPECT_EQ(color(4, 2, 1), 2.f / 16.f);           // G
   EXPECT_EQ(color(4, 2, 2), 1.f / 16.f);           // B
   EXPECT_EQ(color(4, 2, 3), 0.f);                  // A
-  std::vector<std::string> unnamed;
-  for (int c = 0; c < 5; ++c) unnamed.push_back("c" + std::to_string(c));
+  const std::vector<std::string> unnamed = {"c0", "c1", "c2", "c3", "c4"};
   std::vector<float> grey(std::size_t(width * height * 5), 2.f);
   write_with_oiio(file("five.exr"), width, height, unnamed, OIIO::TypeDesc::FLOAT,
                   OIIO::TypeDesc::FLOAT, grey.data());

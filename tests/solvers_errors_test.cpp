@@ -857,7 +857,7 @@ TEST(ErrorMessages, NumericalErrorLeavesOutUnknownIndices) {
   EXPECT_STREQ(NumericalError(-1, 7, "x").what(), "tridiff: row 7: x");
   EXPECT_STREQ(NumericalError(-1, -1, "failed").what(), "tridiff: failed");
   EXPECT_EQ(NumericalError(-1, -1, "failed").row(), -1);
-  EXPECT_STREQ(InvalidArgument("n", -1, -1, "must be >= 1").what(),
+  EXPECT_STREQ(InvalidArgument("n", "must be >= 1").what(),
                "tridiff: argument 'n': must be >= 1");
 }
 

@@ -30,7 +30,7 @@ std::vector<double> parse_sigmas(const std::string& text) {
     char* end = nullptr;
     const double s = std::strtod(item.c_str(), &end);
     if (end == item.c_str() || *end != '\0' || !(s > 0))
-      throw InvalidArgument("--sigmas", -1, -1, "'" + item + "' is not a sigma > 0");
+      throw InvalidArgument("--sigmas", "'" + item + "' is not a sigma > 0");
     sigmas.push_back(s);
   }
   return sigmas;

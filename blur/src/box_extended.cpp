@@ -22,8 +22,8 @@ double ExtendedBox::variance() const {
 
 ExtendedBox extended_box(double sigma, int passes) {
   if (!std::isfinite(sigma) || sigma < 0)
-    throw InvalidArgument("sigma", -1, -1, "must be finite and >= 0");
-  if (passes < 1) throw InvalidArgument("passes", -1, -1, "must be >= 1");
+    throw InvalidArgument("sigma", "must be finite and >= 0");
+  if (passes < 1) throw InvalidArgument("passes", "must be >= 1");
   const double v = sigma * sigma / passes;  // the variance each pass must add
   const auto plain_variance = [](double r) { return r * (r + 1) / 3; };
   auto r = static_cast<std::ptrdiff_t>(std::floor(0.5 * std::sqrt(12 * v + 1) - 0.5));

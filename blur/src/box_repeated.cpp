@@ -21,8 +21,8 @@ double box_variance(std::ptrdiff_t width) { return (double(width) * double(width
 
 std::vector<std::ptrdiff_t> box_widths(double sigma, int passes) {
   if (!std::isfinite(sigma) || sigma < 0)
-    throw InvalidArgument("sigma", -1, -1, "must be finite and >= 0");
-  if (passes < 1) throw InvalidArgument("passes", -1, -1, "must be >= 1");
+    throw InvalidArgument("sigma", "must be finite and >= 0");
+  if (passes < 1) throw InvalidArgument("passes", "must be >= 1");
   const double n = passes, target = 12 * sigma * sigma;  // 12 sigma^2 = sum of (w^2 - 1)
   auto lower = static_cast<std::ptrdiff_t>(std::floor(std::sqrt(target / n + 1)));
   if (lower % 2 == 0) --lower;
@@ -201,14 +201,14 @@ void filter_rows(Plane plane, std::span<const BoxPass> passes, int threads) {
 
 void box_passes(Plane out, ConstPlane in, std::span<const BoxPass> passes, int threads) {
   if (in.width() < 1 || in.height() < 1 || !in.data())
-    throw InvalidArgument("in", -1, -1, "is empty");
+    throw InvalidArgument("in", "is empty");
   if (out.width() != in.width() || out.height() != in.height())
-    throw InvalidArgument("out", -1, -1, "size differs from in");
-  if (threads < 0) throw InvalidArgument("threads", -1, -1, "must be >= 0 (0: all cores)");
+    throw InvalidArgument("out", "size differs from in");
+  if (threads < 0) throw InvalidArgument("threads", "must be >= 0 (0: all cores)");
   std::vector<BoxPass> effective;  // identity passes (radius 0, no end weights) dropped
   for (const BoxPass& p : passes) {
     if (p.radius < 0 || !(p.end_weight >= 0 && p.end_weight <= 1))
-      throw InvalidArgument("passes", -1, -1, "need radius >= 0 and end_weight in [0, 1]");
+      throw InvalidArgument("passes", "need radius >= 0 and end_weight in [0, 1]");
     if (p.radius > 0 || p.end_weight > 0) effective.push_back(p);
   }
   const int resolved = resolve_threads(threads);

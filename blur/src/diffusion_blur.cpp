@@ -20,7 +20,7 @@ Image single_plane(ConstPlane plane) {
 
 void require_sigma(double sigma) {
   if (!std::isfinite(sigma) || !(sigma > 0))
-    throw InvalidArgument("sigma", -1, -1, "must be finite and > 0, got " + std::to_string(sigma));
+    throw InvalidArgument("sigma", "must be finite and > 0, got " + std::to_string(sigma));
 }
 
 DiffusionOptions with_threads(int threads) {
@@ -46,7 +46,7 @@ void explicit_diffusion_blur(Plane out, ConstPlane in, double sigma, int threads
 
 void implicit_diffusion_blur(Plane out, ConstPlane in, double sigma, int steps, int threads) {
   require_sigma(sigma);
-  if (steps < 1) throw InvalidArgument("steps", -1, -1, "must be >= 1");
+  if (steps < 1) throw InvalidArgument("steps", "must be >= 1");
   LinkField beta(in.width(), in.height());
   const float b = static_cast<float>(sigma * sigma / (2.0 * steps));
   for (Plane links : {beta.horizontal(), beta.vertical()})

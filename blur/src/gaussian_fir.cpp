@@ -114,7 +114,7 @@ constexpr std::array<PlaneFilter, sizeof...(I)> filters(std::index_sequence<I...
 void run_gaussian_fir(Plane out, ConstPlane in, const BlurOptions& options) {
   const std::ptrdiff_t r = gaussian_radius(options.sigma, kTailMass);
   if (r > kMaxRadius)  // the registry's sigma range keeps r within the compiled windows
-    throw InvalidArgument("sigma", -1, -1, "needs a radius of " + std::to_string(r) +
+    throw InvalidArgument("sigma", "needs a radius of " + std::to_string(r) +
                                                " > " + std::to_string(kMaxRadius));
   const std::vector<float> k = gaussian_kernel(options.sigma, r);
   static constexpr auto kFilters = filters(std::make_index_sequence<kMaxRadius>());

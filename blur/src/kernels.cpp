@@ -31,7 +31,7 @@ std::ptrdiff_t gaussian_radius(double sigma) { return gaussian_radius(sigma, kGa
 
 std::ptrdiff_t gaussian_radius(double sigma, double tail_mass) {
   if (!(tail_mass > 0 && tail_mass < 1))
-    throw InvalidArgument("tail_mass", -1, -1, "must lie in (0, 1), got " + std::to_string(tail_mass));
+    throw InvalidArgument("tail_mass", "must lie in (0, 1), got " + std::to_string(tail_mass));
   const std::ptrdiff_t max_radius = reference_radius(sigma);  // also checks sigma
   const std::vector<double> full = sampled_gaussian(sigma, max_radius);
   // full is normalised over [-max_radius, max_radius], whose own tail beyond is < 2e-9: the
@@ -58,8 +58,7 @@ std::vector<float> gaussian_kernel(double sigma) {
 
 std::vector<float> triangle_kernel(std::ptrdiff_t size) {
   if (size < 1 || size % 2 == 0)
-    throw InvalidArgument("size", -1, -1,
-                          "must be odd and >= 1, got " + std::to_string(size));
+    throw InvalidArgument("size", "must be odd and >= 1, got " + std::to_string(size));
   const std::ptrdiff_t middle = (size + 1) / 2, radius = size / 2;
   const double norm = 1.0 / (double(middle) * double(middle));
   std::vector<float> kernel(size);
@@ -97,46 +96,42 @@ namespace blur_detail {
 
 void check_convolution_planes(ConstPlane out, ConstPlane in, int threads) {
   if (in.width() < 1 || in.height() < 1 || !in.data())
-    throw InvalidArgument("in", -1, -1, "is empty");
+    throw InvalidArgument("in", "is empty");
   if (out.width() != in.width() || out.height() != in.height() || !out.data())
-    throw InvalidArgument("out", -1, -1,
-                          "is " + std::to_string(out.width()) + " x " +
+    throw InvalidArgument("out", "is " + std::to_string(out.width()) + " x " +
                               std::to_string(out.height()) + ", in is " +
                               std::to_string(in.width()) + " x " + std::to_string(in.height()));
   const float* in_end = in.row(in.height() - 1) + in.width();
   const float* out_end = out.row(out.height() - 1) + out.width();
   if (in.data() < out_end && out.data() < in_end)
-    throw InvalidArgument("out", -1, -1, "overlaps in");
-  if (threads < 0) throw InvalidArgument("threads", -1, -1, "must be >= 0 (0: all cores)");
+    throw InvalidArgument("out", "overlaps in");
+  if (threads < 0) throw InvalidArgument("threads", "must be >= 0 (0: all cores)");
 }
 
 namespace {
 void check_weights(std::span<const float> weights, const char* name) {
   for (float w : weights)
-    if (!std::isfinite(w)) throw InvalidArgument(name, -1, -1, "has a weight that is not finite");
+    if (!std::isfinite(w)) throw InvalidArgument(name, "has a weight that is not finite");
 }
 }  // namespace
 
 void check_kernel(std::span<const float> kernel, const char* name) {
-  if (kernel.empty()) throw InvalidArgument(name, -1, -1, "is empty");
+  if (kernel.empty()) throw InvalidArgument(name, "is empty");
   if (kernel.size() % 2 == 0)
-    throw InvalidArgument(name, -1, -1,
-                          "must have odd length (2r + 1, centred), got " +
+    throw InvalidArgument(name, "must have odd length (2r + 1, centred), got " +
                               std::to_string(kernel.size()));
   check_weights(kernel, name);
 }
 
 void check_kernel(const Kernel2D& kernel, const char* name) {
   if (kernel.width < 1 || kernel.height < 1 || kernel.weights.empty())
-    throw InvalidArgument(name, -1, -1, "is empty");
+    throw InvalidArgument(name, "is empty");
   if (kernel.width % 2 == 0 || kernel.height % 2 == 0)
-    throw InvalidArgument(name, -1, -1,
-                          "must be odd in both directions (centred), got " +
+    throw InvalidArgument(name, "must be odd in both directions (centred), got " +
                               std::to_string(kernel.width) + " x " +
                               std::to_string(kernel.height));
   if (static_cast<std::ptrdiff_t>(kernel.weights.size()) != kernel.width * kernel.height)
-    throw InvalidArgument(name, -1, -1,
-                          "has " + std::to_string(kernel.weights.size()) +
+    throw InvalidArgument(name, "has " + std::to_string(kernel.weights.size()) +
                               " weights, width x height is " +
                               std::to_string(kernel.width * kernel.height));
   check_weights(kernel.weights, name);

@@ -50,11 +50,9 @@ struct Tap {
 
 void check_kernel(const SpreadingKernel& kernel) {
   if (kernel.radius < 1)
-    throw InvalidArgument("kernel", -1, -1,
-                          "radius must be >= 1, got " + std::to_string(kernel.radius));
+    throw InvalidArgument("kernel", "radius must be >= 1, got " + std::to_string(kernel.radius));
   if (!(kernel.blend >= 0 && kernel.blend <= 1))
-    throw InvalidArgument("kernel", -1, -1,
-                          "blend must be in [0, 1], got " + std::to_string(kernel.blend));
+    throw InvalidArgument("kernel", "blend must be in [0, 1], got " + std::to_string(kernel.blend));
 }
 
 // The second derivative of K as five taps (see the file comment for the +1).
@@ -200,7 +198,7 @@ double spreading_variance(const SpreadingKernel& kernel) {
 
 SpreadingKernel spreading_kernel_for_sigma(double sigma) {
   if (!std::isfinite(sigma) || !(sigma > 0))
-    throw InvalidArgument("sigma", -1, -1, "must be finite and > 0, got " + std::to_string(sigma));
+    throw InvalidArgument("sigma", "must be finite and > 0, got " + std::to_string(sigma));
   // (r^2 - 1) / 6 + blend ((r + 1)^2 - r^2) / 6 = s^2  =>  r = floor(sqrt(6 s^2 + 1)).
   const double s = kTentSigmaScale * sigma;
   const double v = 6 * s * s + 1;
@@ -213,14 +211,13 @@ void polynomial_spread(Plane out, ConstPlane in, const SpreadingKernel& kernel, 
                        int threads) {
   check_kernel(kernel);
   if (in.width() < 1 || in.height() < 1 || !in.data())
-    throw InvalidArgument("in", -1, -1, "is empty");
+    throw InvalidArgument("in", "is empty");
   if (out.width() != in.width() || out.height() != in.height())
-    throw InvalidArgument("out", -1, -1, "size differs from in");
+    throw InvalidArgument("out", "size differs from in");
   if (border != Border::replicate && border != Border::zero)
-    throw InvalidArgument("border", -1, -1,
-                          std::string(border_name(border)) +
+    throw InvalidArgument("border", std::string(border_name(border)) +
                               " is not supported by polynomial spreading (replicate, zero)");
-  if (threads < 0) throw InvalidArgument("threads", -1, -1, "must be >= 0 (0: all cores)");
+  if (threads < 0) throw InvalidArgument("threads", "must be >= 0 (0: all cores)");
   const bool replicate = border == Border::replicate;
   const int team = resolve_threads(threads);
   spread_columns(in, out, kernel, replicate, team);

@@ -28,7 +28,7 @@ AnalysisTaps analysis_taps(PyramidFilter filter) {
     case PyramidFilter::box4: return {0.25f, 0.25f};
     case PyramidFilter::quasi: return {13.f / 64, 19.f / 64};
   }
-  throw InvalidArgument("filter", -1, -1, "unknown pyramid filter");
+  throw InvalidArgument("filter", "unknown pyramid filter");
 }
 
 // Floor division by 2 for any sign (grid indices of the margins are negative).
@@ -245,21 +245,19 @@ bool overlap(ConstPlane a, ConstPlane b) {
 void check_arguments(ConstPlane in, ConstPlane out, int levels, double coarse_sigma,
                      Border border, int threads) {
   if (in.width() < 1 || in.height() < 1 || !in.data())
-    throw InvalidArgument("in", -1, -1, "is empty");
+    throw InvalidArgument("in", "is empty");
   if (out.width() != in.width() || out.height() != in.height() || !out.data())
-    throw InvalidArgument("out", -1, -1, "size differs from in");
-  if (overlap(in, out)) throw InvalidArgument("out", -1, -1, "overlaps in");
+    throw InvalidArgument("out", "size differs from in");
+  if (overlap(in, out)) throw InvalidArgument("out", "overlaps in");
   if (levels < 0 || levels > kMaxLevels)
-    throw InvalidArgument("levels", -1, -1,
-                          std::to_string(levels) + " is not in [0, " +
+    throw InvalidArgument("levels", std::to_string(levels) + " is not in [0, " +
                               std::to_string(kMaxLevels) + "]");
   if (!std::isfinite(coarse_sigma) || coarse_sigma < 0)
-    throw InvalidArgument("coarse_sigma", -1, -1, "must be finite and >= 0");
+    throw InvalidArgument("coarse_sigma", "must be finite and >= 0");
   if (border != Border::replicate)
-    throw InvalidArgument("border", -1, -1,
-                          std::string(border_name(border)) +
+    throw InvalidArgument("border", std::string(border_name(border)) +
                               " is not supported by the pyramid blur (replicate only)");
-  if (threads < 0) throw InvalidArgument("threads", -1, -1, "must be >= 0 (0: all cores)");
+  if (threads < 0) throw InvalidArgument("threads", "must be >= 0 (0: all cores)");
 }
 
 // The effective sigma of 1 to 5 levels, measured with effective_sigma() (relative precision
@@ -278,7 +276,7 @@ const double* measured_sigmas(PyramidFilter filter) {
     case PyramidFilter::box4: return kSigmaBox4;
     case PyramidFilter::quasi: return kSigmaQuasi;
   }
-  throw InvalidArgument("filter", -1, -1, "unknown pyramid filter");
+  throw InvalidArgument("filter", "unknown pyramid filter");
 }
 
 }  // namespace
@@ -329,7 +327,7 @@ void pyramid_blur(Plane out, ConstPlane in, PyramidFilter filter, int levels, Bo
 }
 
 double pyramid_sigma(PyramidFilter filter, int levels) {
-  if (levels < 1) throw InvalidArgument("levels", -1, -1, "must be >= 1");
+  if (levels < 1) throw InvalidArgument("levels", "must be >= 1");
   const double* measured = measured_sigmas(filter);
   if (levels <= kMeasuredLevels) return measured[levels - 1];
   const double growth = (std::pow(4.0, levels) - 1) / (std::pow(4.0, kMeasuredLevels) - 1);
@@ -339,8 +337,7 @@ double pyramid_sigma(PyramidFilter filter, int levels) {
 PyramidPlan pyramid_plan(PyramidFilter filter, double sigma) {
   const double smallest = pyramid_sigma(filter, 1);
   if (!std::isfinite(sigma) || sigma < smallest)
-    throw InvalidArgument("sigma", -1, -1,
-                          "must be finite and >= " + std::to_string(smallest) +
+    throw InvalidArgument("sigma", "must be finite and >= " + std::to_string(smallest) +
                               ", the sigma of one " + std::string(pyramid_filter_name(filter)) +
                               " pyramid level");
   PyramidPlan plan;

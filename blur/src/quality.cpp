@@ -14,7 +14,7 @@ namespace {
 
 void require_same_size(ConstPlane approx, const DoublePlane& exact) {
   if (approx.width() != exact.width || approx.height() != exact.height)
-    throw InvalidArgument("exact", -1, -1, "size differs from approx");
+    throw InvalidArgument("exact", "size differs from approx");
 }
 
 // Mean SSIM of a and b (values in [0, 1]) with a Gaussian window of sigma 1.5.
@@ -166,7 +166,7 @@ Image pattern_texture(std::ptrdiff_t n, std::mt19937& rng) {
 }  // namespace
 
 std::vector<TestPattern> quality_test_set(std::ptrdiff_t size, unsigned seed) {
-  if (size < 8) throw InvalidArgument("size", -1, -1, "must be at least 8");
+  if (size < 8) throw InvalidArgument("size", "must be at least 8");
   std::mt19937 rng(seed);
   std::vector<TestPattern> set;
   set.push_back({"edges", pattern_edges(size)});
@@ -179,8 +179,8 @@ std::vector<TestPattern> quality_test_set(std::ptrdiff_t size, unsigned seed) {
 
 double effective_sigma(const PlaneBlur& blur_plane, std::span<const TestPattern> patterns,
                        double lo, double hi, Border border) {
-  if (patterns.empty()) throw InvalidArgument("patterns", -1, -1, "is empty");
-  if (!(lo > 0) || !(hi > lo)) throw InvalidArgument("lo", -1, -1, "need 0 < lo < hi");
+  if (patterns.empty()) throw InvalidArgument("patterns", "is empty");
+  if (!(lo > 0) || !(hi > lo)) throw InvalidArgument("lo", "need 0 < lo < hi");
   std::vector<DoublePlane> inputs, outputs;
   for (const TestPattern& p : patterns) {
     Image out(p.image.width(), p.image.height(), 1);

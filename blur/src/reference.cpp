@@ -19,8 +19,8 @@ std::ptrdiff_t reference_radius(double sigma) {
 
 std::vector<double> sampled_gaussian(double sigma, std::ptrdiff_t radius) {
   if (!(sigma > 0) || !std::isfinite(sigma))
-    throw InvalidArgument("sigma", -1, -1, "must be finite and > 0, got " + std::to_string(sigma));
-  if (radius < 0) throw InvalidArgument("radius", -1, -1, "must be >= 0");
+    throw InvalidArgument("sigma", "must be finite and > 0, got " + std::to_string(sigma));
+  if (radius < 0) throw InvalidArgument("radius", "must be >= 0");
   std::vector<double> kernel(2 * radius + 1);
   double sum = 0;
   for (std::ptrdiff_t k = -radius; k <= radius; ++k)
@@ -71,8 +71,8 @@ DoublePlane convolve_separable(const DoublePlane& in, const std::vector<double>&
 }  // namespace
 
 DoublePlane reference_gaussian(const DoublePlane& in, double sigma, Border border, int threads) {
-  if (in.width < 1 || in.height < 1) throw InvalidArgument("in", -1, -1, "is empty");
-  if (threads < 0) throw InvalidArgument("threads", -1, -1, "must be >= 0 (0: all cores)");
+  if (in.width < 1 || in.height < 1) throw InvalidArgument("in", "is empty");
+  if (threads < 0) throw InvalidArgument("threads", "must be >= 0 (0: all cores)");
   const std::vector<double> kernel = sampled_gaussian(sigma, reference_radius(sigma));
   return convolve_separable(in, kernel, border, resolve_threads(threads));
 }

@@ -249,8 +249,7 @@ const BlurMethod& find_blur_method(std::string_view name) {
     if (method.name == name) return method;
     known += (known.empty() ? "" : ", ") + std::string(method.name);
   }
-  throw InvalidArgument("method", -1, -1,
-                        "unknown blur method '" + std::string(name) + "' (known: " + known + ")");
+  throw InvalidArgument("method", "unknown blur method '" + std::string(name) + "' (known: " + known + ")");
 }
 
 namespace {
@@ -264,22 +263,19 @@ bool overlap(ConstPlane a, ConstPlane b) {
 void check(const BlurMethod& method, ConstPlane in, ConstPlane out, const BlurOptions& s) {
   const std::string who = "method '" + std::string(method.name) + "'";
   if (in.width() < 1 || in.height() < 1 || !in.data())
-    throw InvalidArgument("in", -1, -1, "is empty");
+    throw InvalidArgument("in", "is empty");
   if (out.width() != in.width() || out.height() != in.height())
-    throw InvalidArgument("out", -1, -1,
-                          "is " + std::to_string(out.width()) + " x " +
+    throw InvalidArgument("out", "is " + std::to_string(out.width()) + " x " +
                               std::to_string(out.height()) + ", in is " +
                               std::to_string(in.width()) + " x " + std::to_string(in.height()));
-  if (overlap(in, out)) throw InvalidArgument("out", -1, -1, "overlaps in");
+  if (overlap(in, out)) throw InvalidArgument("out", "overlaps in");
   if (!std::isfinite(s.sigma) || s.sigma < method.min_sigma || s.sigma > method.max_sigma)
-    throw InvalidArgument("sigma", -1, -1,
-                          std::to_string(s.sigma) + " is outside [" +
+    throw InvalidArgument("sigma", std::to_string(s.sigma) + " is outside [" +
                               std::to_string(method.min_sigma) + ", " +
                               std::to_string(method.max_sigma) + "] for " + who);
   if (!method.borders.contains(s.border))
-    throw InvalidArgument("border", -1, -1,
-                          std::string(border_name(s.border)) + " is not supported by " + who);
-  if (s.threads < 0) throw InvalidArgument("threads", -1, -1, "must be >= 0 (0: all cores)");
+    throw InvalidArgument("border", std::string(border_name(s.border)) + " is not supported by " + who);
+  if (s.threads < 0) throw InvalidArgument("threads", "must be >= 0 (0: all cores)");
 }
 
 }  // namespace
@@ -290,8 +286,8 @@ void blur(Plane out, ConstPlane in, const BlurMethod& method, const BlurOptions&
 }
 
 void blur(Image& out, const Image& in, const BlurMethod& method, const BlurOptions& options) {
-  if (in.empty()) throw InvalidArgument("in", -1, -1, "is empty");
-  if (&in == &out) throw InvalidArgument("out", -1, -1, "is the input image");
+  if (in.empty()) throw InvalidArgument("in", "is empty");
+  if (&in == &out) throw InvalidArgument("out", "is the input image");
   if (out.empty() || out.width() != in.width() || out.height() != in.height() ||
       out.channels() != in.channels())
     out.reset(in.width(), in.height(), in.channels());

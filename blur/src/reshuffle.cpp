@@ -28,23 +28,20 @@ namespace {
 
 void check_kernel_shape(std::span<const double> kernel, std::ptrdiff_t width,
                         std::ptrdiff_t height, int levels) {
-  if (kernel.empty()) throw InvalidArgument("kernel", -1, -1, "is empty");
+  if (kernel.empty()) throw InvalidArgument("kernel", "is empty");
   if (width < 1 || width % 2 == 0)
-    throw InvalidArgument("width", -1, -1,
-                          "must be odd and >= 1 (the kernel is centred), got " +
+    throw InvalidArgument("width", "must be odd and >= 1 (the kernel is centred), got " +
                               std::to_string(width));
   if (height < 1 || height % 2 == 0)
-    throw InvalidArgument("height", -1, -1,
-                          "must be odd and >= 1 (the kernel is centred), got " +
+    throw InvalidArgument("height", "must be odd and >= 1 (the kernel is centred), got " +
                               std::to_string(height));
   if (static_cast<std::ptrdiff_t>(kernel.size()) != width * height)
-    throw InvalidArgument("kernel", -1, -1,
-                          "has " + std::to_string(kernel.size()) + " weights, width x height is " +
+    throw InvalidArgument("kernel", "has " + std::to_string(kernel.size()) + " weights, width x height is " +
                               std::to_string(width * height));
   for (double w : kernel)
-    if (!std::isfinite(w)) throw InvalidArgument("kernel", -1, -1, "has a non-finite weight");
+    if (!std::isfinite(w)) throw InvalidArgument("kernel", "has a non-finite weight");
   if (levels < 0)
-    throw InvalidArgument("levels", -1, -1, "must be >= 0 (0: exact weights)");
+    throw InvalidArgument("levels", "must be >= 0 (0: exact weights)");
 }
 
 // Every weight rounded to a multiple of max|w| / levels; levels = 0 leaves them as they are.
@@ -60,10 +57,10 @@ std::vector<double> quantised(std::span<const double> kernel, int levels) {
 
 void check_planes(ConstPlane in, ConstPlane out, int threads) {
   if (in.width() < 1 || in.height() < 1 || !in.data())
-    throw InvalidArgument("in", -1, -1, "is empty");
+    throw InvalidArgument("in", "is empty");
   if (out.width() != in.width() || out.height() != in.height())
-    throw InvalidArgument("out", -1, -1, "size differs from in");
-  if (threads < 0) throw InvalidArgument("threads", -1, -1, "must be >= 0 (0: all cores)");
+    throw InvalidArgument("out", "size differs from in");
+  if (threads < 0) throw InvalidArgument("threads", "must be >= 0 (0: all cores)");
 }
 
 // `line` extended by `pad` pixels on each side by the border rule (zero border: 0).
@@ -148,8 +145,7 @@ ReshuffledKernel reshuffle_kernel(std::span<const double> kernel, std::ptrdiff_t
       if (const double w = weights[j * width + i]; w != 0)
         sets[w].push_back({cx - i, cy - j});  // convolution: the input lies opposite the tap
   if (sets.empty())
-    throw InvalidArgument(levels ? "levels" : "kernel", -1, -1,
-                          levels ? "quantises every weight to zero" : "is all zero");
+    throw InvalidArgument(levels ? "levels" : "kernel", levels ? "quantises every weight to zero" : "is all zero");
   ReshuffledKernel out;
   out.radius_x = cx;
   out.radius_y = cy;
@@ -164,7 +160,7 @@ void reshuffle_filter(Plane out, ConstPlane in, const ReshuffledKernel& kernel, 
                       int threads) {
   check_planes(in, out, threads);
   if (kernel.weights.empty() || kernel.weights.size() != kernel.links.size())
-    throw InvalidArgument("kernel", -1, -1, "is empty (make it with reshuffle_kernel)");
+    throw InvalidArgument("kernel", "is empty (make it with reshuffle_kernel)");
   const std::ptrdiff_t w = in.width(), h = in.height();
   const std::ptrdiff_t px = kernel.radius_x, py = kernel.radius_y, pw = w + 2 * px;
   // The input extended by the kernel's half-sizes, so that links need no bounds checks.
@@ -193,9 +189,9 @@ void reshuffle_filter_separable(Plane out, ConstPlane in, const ReshuffledKernel
                                 Border border, int threads) {
   check_planes(in, out, threads);
   if (kernel.weights.empty() || kernel.weights.size() != kernel.links.size())
-    throw InvalidArgument("kernel", -1, -1, "is empty (make it with reshuffle_kernel)");
+    throw InvalidArgument("kernel", "is empty (make it with reshuffle_kernel)");
   if (kernel.radius_y != 0)
-    throw InvalidArgument("kernel", -1, -1, "must be 1D (height 1) for the separable filter");
+    throw InvalidArgument("kernel", "must be 1D (height 1) for the separable filter");
   const int team = resolve_threads(threads);
   Image rows(in.width(), in.height(), 1);
   filter_rows(in, rows.plane(0), kernel, border, team);

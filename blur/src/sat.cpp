@@ -13,7 +13,7 @@ namespace {
 
 void check_input(ConstPlane in) {
   if (in.width() < 1 || in.height() < 1 || !in.data())
-    throw InvalidArgument("in", -1, -1, "is empty");
+    throw InvalidArgument("in", "is empty");
 }
 
 // The prefix sum P(i) = x[clamp 0] + ... + x[clamp i] of a line of n pixels extended by the
@@ -60,8 +60,8 @@ template <class Table>
 void box_filter(const Table& t, Plane out, std::ptrdiff_t rx, std::ptrdiff_t ry, int threads) {
   const std::ptrdiff_t w = t.width(), h = t.height();
   if (out.width() != w || out.height() != h)
-    throw InvalidArgument("out", -1, -1, "size differs from the table's");
-  if (rx < 0 || ry < 0) throw InvalidArgument("radius", -1, -1, "must be >= 0");
+    throw InvalidArgument("out", "size differs from the table's");
+  if (rx < 0 || ry < 0) throw InvalidArgument("radius", "must be >= 0");
   threads = resolve_threads(threads);
   const double inv_area = 1.0 / (double(2 * rx + 1) * double(2 * ry + 1));
   // Columns whose box lies inside the image horizontally: [inner_x0, inner_x1).

@@ -65,16 +65,14 @@ void require_finite(const Image& src) {
     for (std::ptrdiff_t y = 0; y < plane.height(); ++y)
       for (std::ptrdiff_t x = 0; x < plane.width(); ++x)
         if (!std::isfinite(plane(x, y)))
-          throw InvalidArgument("src", -1, -1,
-                                "pixel (" + std::to_string(x) + ", " + std::to_string(y) +
+          throw InvalidArgument("src", "pixel (" + std::to_string(x) + ", " + std::to_string(y) +
                                     "), channel " + std::to_string(c) + ": is not finite");
   }
 }
 
 void require_stable(const LinkField& kappa) {
   if (kappa.max_link() > kExplicitStabilityBound)
-    throw InvalidArgument("kappa", -1, -1,
-                          "largest link conductance " + std::to_string(kappa.max_link()) +
+    throw InvalidArgument("kappa", "largest link conductance " + std::to_string(kappa.max_link()) +
                               " exceeds the explicit stability bound 0.25 (seed 001 §3.9); "
                               "use diffuse_explicit, which sub-steps");
 }
@@ -126,7 +124,7 @@ int explicit_steps_for(float max_link, int max_steps) {
             << " explicit steps, more than the " << max_steps
             << " allowed (DiffusionOptions::max_explicit_steps); an implicit (ADI) step blurs "
                "this far in one";
-    throw InvalidArgument("beta", -1, -1, message.str());
+    throw InvalidArgument("beta", message.str());
   }
   return int(steps);
 }
@@ -135,7 +133,7 @@ int explicit_steps_for(float max_link, int max_steps) {
 
 DiffusionReport diffuse_explicit_steps(Image& dst, const Image& src, const LinkField& kappa,
                                        int steps, const DiffusionOptions& options) {
-  if (steps < 0) throw InvalidArgument("steps", -1, -1, "must be >= 0");
+  if (steps < 0) throw InvalidArgument("steps", "must be >= 0");
   require_stable(kappa);
   require_size(src, kappa.width(), kappa.height(), "kappa");
   require_finite(src);
@@ -174,8 +172,7 @@ DiffusionReport diffuse_explicit(Image& dst, const Image& src, const LinkField& 
 void diffuse_isotropic(Image& dst, const Image& src, float c, int iterations,
                        const DiffusionOptions& options) {
   if (!(c > 0 && c <= kExplicitStabilityBound))
-    throw InvalidArgument("c", -1, -1,
-                          std::to_string(c) + " is outside (0, 0.25], the range where the "
+    throw InvalidArgument("c", std::to_string(c) + " is outside (0, 0.25], the range where the "
                                               "explicit step is stable (seed 001 §3.9)");
   LinkField kappa(src.width(), src.height());
   for (Plane p : {kappa.horizontal(), kappa.vertical()})
@@ -185,8 +182,8 @@ void diffuse_isotropic(Image& dst, const Image& src, float c, int iterations,
 }
 
 int isotropic_iterations_for_sigma(float sigma, float c) {
-  if (!(sigma >= 0) || !std::isfinite(sigma)) throw InvalidArgument("sigma", -1, -1, "must be finite and >= 0");
-  if (!(c > 0 && c <= kExplicitStabilityBound)) throw InvalidArgument("c", -1, -1, "must be in (0, 0.25]");
+  if (!(sigma >= 0) || !std::isfinite(sigma)) throw InvalidArgument("sigma", "must be finite and >= 0");
+  if (!(c > 0 && c <= kExplicitStabilityBound)) throw InvalidArgument("c", "must be in (0, 0.25]");
   return int(std::ceil(double(sigma) * sigma / (2.0 * c) - 1e-9));
 }
 

@@ -20,8 +20,7 @@ namespace {
 
 void require_valid_link(float link, const char* direction, std::ptrdiff_t x, std::ptrdiff_t y) {
   if (std::isfinite(link) && link >= 0) return;
-  throw InvalidArgument(std::string(direction) + " link", -1, -1,
-                        "at pixel (" + std::to_string(x) + ", " + std::to_string(y) + ") is " +
+  throw InvalidArgument(std::string(direction) + " link", "at pixel (" + std::to_string(x) + ", " + std::to_string(y) + ") is " +
                             std::to_string(link) + "; conductances must be finite and >= 0");
 }
 
@@ -83,7 +82,7 @@ void LinkField::throw_first_invalid_link() const {
       require_valid_link(horizontal()(x, y), "horizontal", x, y);
       require_valid_link(vertical()(x, y), "vertical", x, y);
     }
-  throw InvalidArgument("links", -1, -1, "changed while being checked");
+  throw InvalidArgument("links", "changed while being checked");
 }
 
 }  // namespace tridiff

@@ -35,17 +35,17 @@ float Arguments::number(const std::string& key, float fallback) const {
   char* end = nullptr;
   const float value = std::strtof(it->second.c_str(), &end);
   if (end == it->second.c_str() || *end != '\0' || !std::isfinite(value))
-    throw InvalidArgument("--" + key, -1, -1, "'" + it->second + "' is not a number");
+    throw InvalidArgument("--" + key, "'" + it->second + "' is not a number");
   return value;
 }
 
 int Arguments::integer(const std::string& key, int fallback) const {
   const float value = number(key, float(fallback));
-  if (value != std::floor(value)) throw InvalidArgument("--" + key, -1, -1, "must be an integer");
+  if (value != std::floor(value)) throw InvalidArgument("--" + key, "must be an integer");
   // Converting a float beyond int's range is undefined: refuse it first.
   constexpr float kLimit = 2147483648.f;  // 2^31
   if (!(value >= -kLimit && value < kLimit))
-    throw InvalidArgument("--" + key, -1, -1, "'" + text(key, "") + "' is out of range");
+    throw InvalidArgument("--" + key, "'" + text(key, "") + "' is out of range");
   return int(value);
 }
 
@@ -87,23 +87,22 @@ Arguments parse(int argc, char** argv, int first, const std::vector<std::string>
     std::string key = argv[i];
     if (key == "-o") key = "--output";
     if (key == "-h") key = "--help";
-    if (key.rfind("--", 0) != 0) throw InvalidArgument(key, -1, -1, "unexpected argument");
+    if (key.rfind("--", 0) != 0) throw InvalidArgument(key, "unexpected argument");
     key = key.substr(2);
     // Given twice, one of the two would be ignored: refused, whichever it is.
     const std::string alias = key == "output" ? " (-o and --output are one option)"
                               : key == "help" ? " (-h and --help are one option)"
                                               : "";
     if (std::find(flags.begin(), flags.end(), key) != flags.end()) {
-      if (args.flag(key)) throw InvalidArgument("--" + key, -1, -1, "is given twice" + alias);
+      if (args.flag(key)) throw InvalidArgument("--" + key, "is given twice" + alias);
       args.flags.push_back(key);
       continue;
     }
     if (std::find(valued.begin(), valued.end(), key) == valued.end())
-      throw InvalidArgument("--" + key, -1, -1, "unknown option (see tridiff --help)");
-    if (i + 1 >= argc) throw InvalidArgument("--" + key, -1, -1, "needs a value");
+      throw InvalidArgument("--" + key, "unknown option (see tridiff --help)");
+    if (i + 1 >= argc) throw InvalidArgument("--" + key, "needs a value");
     if (args.has(key))
-      throw InvalidArgument("--" + key, -1, -1,
-                            "is given twice ('" + args.text(key, "") + "' and '" + argv[i + 1] +
+      throw InvalidArgument("--" + key, "is given twice ('" + args.text(key, "") + "' and '" + argv[i + 1] +
                                 "')" + alias);
     args.values[key] = argv[++i];
   }
@@ -116,15 +115,14 @@ ColorEncoding parse_encoding(const std::string& text) {
   if (text == "auto") return ColorEncoding::Auto;
   if (text == "srgb") return ColorEncoding::Srgb;
   if (text == "linear") return ColorEncoding::Linear;
-  throw InvalidArgument("--color-encoding", -1, -1, "'" + text + "' is not auto, srgb or linear");
+  throw InvalidArgument("--color-encoding", "'" + text + "' is not auto, srgb or linear");
 }
 
 DepthConvention parse_convention(const std::string& text) {
   if (text == "linear") return DepthConvention::Linear;
   if (text == "normalized") return DepthConvention::Normalized;
   if (text == "inverse") return DepthConvention::Inverse;
-  throw InvalidArgument("--depth-convention", -1, -1,
-                        "'" + text + "' is not linear, normalized or inverse");
+  throw InvalidArgument("--depth-convention", "'" + text + "' is not linear, normalized or inverse");
 }
 
 double seconds_since(std::chrono::steady_clock::time_point start) {
@@ -156,7 +154,7 @@ auto with_stderr_muted(Body&& body) {
 // Colour and depth from files, or the built-in scene (whose lens replaces the default one).
 void load_images(const Arguments& args, int threads, Frame& frame, ThinLens& lens) {
   if (args.has("color")) {
-    if (!args.has("depth")) throw InvalidArgument("--depth", -1, -1, "is required with --color");
+    if (!args.has("depth")) throw InvalidArgument("--depth", "is required with --color");
     const ColorEncoding encoding = parse_encoding(args.text("color-encoding", "auto"));
     frame.color = with_stderr_muted([&] {
                     return read_color(args.text("color", ""), {.encoding = encoding,
@@ -179,10 +177,10 @@ void load_images(const Arguments& args, int threads, Frame& frame, ThinLens& len
     frame.source = args.text("color", "") + " + " + args.text("depth", "");
     return;
   }
-  if (args.has("depth")) throw InvalidArgument("--color", -1, -1, "is required with --depth");
+  if (args.has("depth")) throw InvalidArgument("--color", "is required with --depth");
   const int width = args.integer("width", 1920), height = args.integer("height", 1080);
   if (width < 1 || height < 1 || width > 16384 || height > 16384)
-    throw InvalidArgument("--width/--height", -1, -1, "must be in [1, 16384]");
+    throw InvalidArgument("--width/--height", "must be in [1, 16384]");
   Scene scene = procedural_scene(width, height, threads);
   frame.color = std::move(scene.color);
   frame.depth = std::move(scene.depth);
@@ -190,29 +188,19 @@ void load_images(const Arguments& args, int threads, Frame& frame, ThinLens& len
   frame.source = "built-in scene " + std::to_string(width) + " x " + std::to_string(height);
 }
 
-// The library names a lens or curve parameter by its field (f_number); the user typed an
-// option (--f-number): the same error, named as the option.
-template <class Body>
-void with_options_named(Body&& body) {
-  try {
-    body();
-  } catch (const InvalidArgument& error) {
-    std::string option = error.argument();
-    std::replace(option.begin(), option.end(), '_', '-');
-    if (std::find(kInputOptions.begin(), kInputOptions.end(), option) == kInputOptions.end())
-      throw;
-    // The message may name other fields too ("must be beyond near_start"): as options.
-    std::string message = error.message();
-    for (const std::string& other : kInputOptions) {
-      std::string field = other;
-      std::replace(field.begin(), field.end(), '-', '_');
-      if (field == other) continue;  // one word: the same in prose, left alone
-      for (auto at = message.find(field); at != std::string::npos;
-           at = message.find(field, at + other.size() + 2))
-        message.replace(at, field.size(), "--" + other);
-    }
-    throw InvalidArgument("--" + option, -1, -1, message);
-  }
+std::string kebab(std::string name) {
+  std::replace(name.begin(), name.end(), '_', '-');
+  return name;
+}
+
+std::string snake(std::string name) {
+  std::replace(name.begin(), name.end(), '-', '_');
+  return name;
+}
+
+// with_fields_as_options over the input options (lens, curve, files).
+void with_options_named(const std::function<void()>& work) {
+  with_fields_as_options(kInputOptions, work);
 }
 
 const std::vector<std::string> kLensOptions = {"focus", "f-number", "focal-length",
@@ -269,18 +257,39 @@ void check_input_options(const Arguments& args) {
   if (args.has("color"))
     for (const char* key : {"width", "height"})
       if (args.has(key))
-        throw InvalidArgument("--" + std::string(key), -1, -1,
-                              "sizes the built-in scene and cannot be used with --color (the "
+        throw InvalidArgument("--" + std::string(key), "sizes the built-in scene and cannot be used with --color (the "
                               "image has its own size)");
   const std::string curve = first_given(args, kCurveOptions);
   if (curve.empty()) return;
   const std::string lens = first_given(args, kLensOptions);
   if (!lens.empty())
-    throw InvalidArgument("--" + lens, -1, -1,
-                          "is a thin-lens option, but --" + curve +
+    throw InvalidArgument("--" + lens, "is a thin-lens option, but --" + curve +
                               " chooses the artist curve, which replaces the lens: give one "
                               "or the other");
   with_options_named([&] { validate(artist_curve(args)); });
+}
+
+void with_fields_as_options(const std::vector<std::string>& options,
+                            const std::function<void()>& work,
+                            const std::vector<std::pair<std::string, std::string>>& aliases) {
+  try {
+    work();
+  } catch (const InvalidArgument& error) {
+    std::string option = kebab(error.argument());
+    for (const auto& [field, alias] : aliases)
+      if (error.argument() == field) option = alias;
+    if (std::find(options.begin(), options.end(), option) == options.end()) throw;
+    // The message may name other fields too ("must be beyond near_start"): as options.
+    std::string message = error.message();
+    for (const std::string& other : options) {
+      const std::string field = snake(other);
+      if (field == other) continue;  // one word: the same in prose, left alone
+      for (auto at = message.find(field); at != std::string::npos;
+           at = message.find(field, at + other.size() + 2))
+        message.replace(at, field.size(), "--" + other);
+    }
+    throw InvalidArgument("--" + option, message);
+  }
 }
 
 void with_coc_named(const Arguments& args, const std::function<void()>& work) {
@@ -290,24 +299,18 @@ void with_coc_named(const Arguments& args, const std::function<void()>& work) {
     // A method refuses the CoC map (too large for it): the map is the one the options made.
     if (error.argument() != "coc") throw;
     if (first_given(args, kCurveOptions).empty())
-      throw InvalidArgument("--max-coc", -1, -1,
-                            error.message() + " (the lens's CoC, clamped at --max-coc: lower it)");
+      throw InvalidArgument("--max-coc", error.message() + " (the lens's CoC, clamped at --max-coc: lower it)");
     std::string options;
     for (const char* key : {"near-radius", "far-radius"})
       if (args.has(key)) options += (options.empty() ? "--" : "/--") + std::string(key);
     if (options.empty()) options = "--near-radius/--far-radius";
-    throw InvalidArgument(options, -1, -1,
-                          error.message() + " (the artist curve's CoC: lower its radius)");
+    throw InvalidArgument(options, error.message() + " (the artist curve's CoC: lower its radius)");
   }
 }
 
 int thread_count(const Arguments& args) {
   const int threads = args.integer("threads", 0);
-  try {
-    resolve_threads(threads);
-  } catch (const InvalidArgument& error) {
-    throw InvalidArgument("--threads", -1, -1, error.message());
-  }
+  with_fields_as_options({"threads"}, [&] { resolve_threads(threads); });
   return threads;
 }
 
@@ -318,7 +321,7 @@ std::int64_t max_pixels(const Arguments& args) {
   errno = 0;
   const long long value = std::strtoll(text.c_str(), &end, 10);
   if (end == text.c_str() || *end != '\0' || errno == ERANGE || value < 1)
-    throw InvalidArgument("--max-pixels", -1, -1, "'" + text + "' is not a positive whole number");
+    throw InvalidArgument("--max-pixels", "'" + text + "' is not a positive whole number");
   return value;
 }
 

@@ -6,6 +6,7 @@
 #include <functional>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "tridiff/image/image.hpp"
@@ -48,6 +49,15 @@ Frame load_frame(const Arguments& args, int threads);
 // --width/--height with --color, a lens option with an artist-curve option, and the artist
 // curve itself (e.g. an empty or reversed near range); InvalidArgument naming the option(s).
 void check_input_options(const Arguments& args);
+
+// The library names a parameter by its field (f_number, register_size); the user typed an option
+// (--f-number). The one translation between them, at the command line's edge: runs `work`, and
+// an InvalidArgument naming the field of one of `options` (kebab-case, without "--"; `aliases`
+// maps other field names to options) is thrown again naming "--option", with the field names of
+// `options` in its message renamed the same way. Any other error passes through unchanged.
+void with_fields_as_options(const std::vector<std::string>& options,
+                            const std::function<void()>& work,
+                            const std::vector<std::pair<std::string, std::string>>& aliases = {});
 
 // Runs `work` (a method on the frame's CoC map); a method's InvalidArgument about the map
 // ("coc": too large for it) is named as the options that made it (--max-coc, or the artist

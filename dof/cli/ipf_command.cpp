@@ -85,7 +85,7 @@ double positive(const Arguments& args, const std::string& key, double fallback, 
   if (!(value > 0) || value > most) {
     std::ostringstream text;
     text << "must be > 0 and at most " << most << ", got " << args.text(key, "");
-    throw InvalidArgument("--" + key, -1, -1, text.str());
+    throw InvalidArgument("--" + key, text.str());
   }
   return value;
 }
@@ -93,14 +93,11 @@ double positive(const Arguments& args, const std::string& key, double fallback, 
 // ipf::plan_frame names its arguments ("parts", "register_size", "mask"): as the options.
 ipf::FramePlan plan_as_options(std::ptrdiff_t width, std::ptrdiff_t height,
                                const ipf::PerformanceInput& hardware) {
-  try {
-    return ipf::plan_frame(width, height, hardware.mask, hardware.parts, hardware.register_size);
-  } catch (const InvalidArgument& error) {
-    std::string option = error.argument();
-    if (option != "parts" && option != "register_size" && option != "mask") throw;
-    std::replace(option.begin(), option.end(), '_', '-');
-    throw InvalidArgument("--" + option, -1, -1, error.message());
-  }
+  ipf::FramePlan plan;
+  with_fields_as_options({"parts", "register-size", "mask"}, [&] {
+    plan = ipf::plan_frame(width, height, hardware.mask, hardware.parts, hardware.register_size);
+  });
+  return plan;
 }
 
 // Refuses a run the model would take hours or gigabytes for, naming --mask (the cost grows
@@ -115,32 +112,26 @@ void check_model_cost(std::ptrdiff_t width, std::ptrdiff_t height,
   if (cost.unit_steps > kMaxUnitSteps) {
     text << "is " << cost.unit_steps << " execution-unit steps for the model (pixels x mask^2), "
          << "more than its bound " << kMaxUnitSteps << ": use a smaller --mask or frame";
-    throw InvalidArgument("--mask", -1, -1, text.str());
+    throw InvalidArgument("--mask", text.str());
   }
   if (cost.register_bytes > kMaxRegisterBytes) {
     text << "needs " << cost.register_bytes / (1 << 20) << " MiB of model registers, more than "
          << "its bound " << kMaxRegisterBytes / (1 << 20)
          << " MiB: use a smaller --mask, --register-size or --threads";
-    throw InvalidArgument("--mask", -1, -1, text.str());
+    throw InvalidArgument("--mask", text.str());
   }
 }
 
 ipf::DofRule parse_rule(const std::string& text) {
   if (text == "corrected") return ipf::DofRule::corrected;
   if (text == "printed") return ipf::DofRule::as_printed;
-  throw InvalidArgument("--rule", -1, -1, "'" + text + "' is not corrected or printed");
+  throw InvalidArgument("--rule", "'" + text + "' is not corrected or printed");
 }
 
 // ipf::validate names the program's fields; the user typed options.
 void validate_as_options(const ipf::DofProgram& program) {
-  try {
-    ipf::validate(program);
-  } catch (const InvalidArgument& error) {
-    std::string option = error.argument() == "in_focus_coc_px" ? "in-focus" : error.argument();
-    std::replace(option.begin(), option.end(), '_', '-');
-    const std::string message = error.what();
-    throw InvalidArgument("--" + option, -1, -1, message.substr(message.rfind(": ") + 2));
-  }
+  with_fields_as_options(kIpfValued, [&] { ipf::validate(program); },
+                         {{"in_focus_coc_px", "in-focus"}});
 }
 
 std::string stage_list(const ipf::PipeLayout& layout) {
@@ -205,31 +196,27 @@ IpfPlan plan_ipf(const Arguments& args) {
   plan.files.claim("--output", plan.output);
   const std::string program_name = args.text("program", "dof");
   if (program_name != "dof" && program_name != "laplacian")
-    throw InvalidArgument("--program", -1, -1, "'" + program_name + "' is not dof or laplacian");
+    throw InvalidArgument("--program", "'" + program_name + "' is not dof or laplacian");
   plan.dof = program_name == "dof";
   const int mask = plan.mask = args.integer("mask", 17);
   if (mask < 3 || mask % 2 == 0 || mask > ipf::kMaxMask)
-    throw InvalidArgument("--mask", -1, -1,
-                          "must be odd and in [3, " + std::to_string(ipf::kMaxMask) +
+    throw InvalidArgument("--mask", "must be odd and in [3, " + std::to_string(ipf::kMaxMask) +
                               "] (fig. 10's 8-bit Radius reaches 255 pixels), got " +
                               std::to_string(mask));
   const int parts = plan.parts = args.integer("parts", 4);
   if (parts < 1 || parts > kMaxParts)
-    throw InvalidArgument("--parts", -1, -1,
-                          "must be in [1, " + std::to_string(kMaxParts) + "], got " +
+    throw InvalidArgument("--parts", "must be in [1, " + std::to_string(kMaxParts) + "], got " +
                               std::to_string(parts));
   const int register_stages = plan.register_stages = args.integer("register-size", 0);
   if (register_stages < 0 || register_stages > kMaxRegisterSize)
-    throw InvalidArgument("--register-size", -1, -1,
-                          "must be in [0, " + std::to_string(kMaxRegisterSize) +
+    throw InvalidArgument("--register-size", "must be in [0, " + std::to_string(kMaxRegisterSize) +
                               "] (0: sized for the frame), got " +
                               std::to_string(register_stages));
   const bool dof = plan.dof;
   if (!dof)
     for (const char* key : {"rule", "in-focus", "area-weight-bits", "color-weight-bits"})
       if (args.has(key))
-        throw InvalidArgument("--" + std::string(key), -1, -1,
-                              "applies to --program dof only, not laplacian");
+        throw InvalidArgument("--" + std::string(key), "applies to --program dof only, not laplacian");
   ipf::PerformanceInput& hardware = plan.hardware;
   hardware.mask = mask;
   hardware.parts = parts;

@@ -255,8 +255,7 @@ std::vector<std::string> dof_valued_options() {
 // `tridiff methods` and `tridiff --help` take nothing after them.
 void refuse_arguments_after(int argc, char** argv) {
   if (argc > 2)
-    throw InvalidArgument(argv[2], -1, -1,
-                          std::string("unexpected argument after '") + argv[1] + "'");
+    throw InvalidArgument(argv[2], std::string("unexpected argument after '") + argv[1] + "'");
 }
 
 }  // namespace
@@ -264,7 +263,7 @@ void refuse_arguments_after(int argc, char** argv) {
 namespace tridiff::cli {
 
 CommandLine parse_command_line(int argc, char** argv) {
-  if (argc < 2) throw InvalidArgument("command", -1, -1, "missing (dof, ipf, methods or --help)");
+  if (argc < 2) throw InvalidArgument("command", "missing (dof, ipf, methods or --help)");
   CommandLine line{argv[1], {}};
   if (line.command == "-h" || line.command == "help") line.command = "--help";
   if (line.command == "--help" || line.command == "methods") {
@@ -274,7 +273,7 @@ CommandLine parse_command_line(int argc, char** argv) {
   } else if (line.command == "dof") {
     line.args = parse(argc, argv, 2, kDofFlags, dof_valued_options());
   } else {
-    throw InvalidArgument(line.command, -1, -1, "unknown command (expected dof, ipf or methods)");
+    throw InvalidArgument(line.command, "unknown command (expected dof, ipf or methods)");
   }
   return line;
 }

@@ -382,12 +382,10 @@ void check_depth_options(const DepthOptions& options) {
   if (options.convention != DepthConvention::Normalized) return;
   const float near = options.near_plane, far = options.far_plane;
   if (!(std::isfinite(near) && near >= 0.f))
-    throw InvalidArgument("near_plane", -1, -1,
-                          "must be finite and >= 0 for normalized depth, got " +
+    throw InvalidArgument("near_plane", "must be finite and >= 0 for normalized depth, got " +
                               format_value(near));
   if (!(std::isfinite(far) && far > near))
-    throw InvalidArgument("far_plane", -1, -1,
-                          "must be finite and greater than near_plane (" + format_value(near) +
+    throw InvalidArgument("far_plane", "must be finite and greater than near_plane (" + format_value(near) +
                               ") for normalized depth, got " + format_value(far));
 }
 
@@ -498,7 +496,7 @@ void check_path(const std::string& path, const std::string& extension) {
 }
 
 void check_output(const std::string& path, const std::string& extension, const Image& image) {
-  if (image.empty()) throw InvalidArgument("image", -1, -1, "is empty");
+  if (image.empty()) throw InvalidArgument("image", "is empty");
   check_path(path, extension);
   if (extension == "jpg" || extension == "jpeg" || extension == "jpe" || extension == "jfif") {
     // libjpeg ends the whole process on an oversized image instead of returning an error.

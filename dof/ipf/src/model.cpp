@@ -215,11 +215,10 @@ class MaskUnits {
 };
 
 void require_lanes(const Image& color) {
-  if (color.empty()) throw InvalidArgument("color", -1, -1, "is empty");
+  if (color.empty()) throw InvalidArgument("color", "is empty");
   if (color.channels() > kMaxLanes)
     throw InvalidArgument(
-        "color", -1, -1,
-        "has " + std::to_string(color.channels()) + " channels; the IPF pipe carries at most 4");
+        "color", "has " + std::to_string(color.channels()) + " channels; the IPF pipe carries at most 4");
 }
 
 }  // namespace

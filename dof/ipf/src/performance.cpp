@@ -10,7 +10,7 @@ namespace {
 
 void require_positive(double value, const char* name) {
   if (!(value > 0) || !std::isfinite(value))
-    throw InvalidArgument(name, -1, -1, "must be finite and > 0, got " + std::to_string(value));
+    throw InvalidArgument(name, "must be finite and > 0, got " + std::to_string(value));
 }
 
 // Pixels a part fetches per line: its columns and the halo columns that lie inside the frame.
@@ -35,7 +35,7 @@ void validate(const PerformanceInput& input) {
   require_positive(input.clock_hz, "clock_hz");
   require_positive(input.bandwidth_bytes_per_s, "bandwidth_bytes_per_s");
   if (input.read_bytes_per_pixel < 0 || input.write_bytes_per_pixel < 0)
-    throw InvalidArgument("read_bytes_per_pixel", -1, -1, "must be >= 0");
+    throw InvalidArgument("read_bytes_per_pixel", "must be >= 0");
 }
 
 double Performance::pixels_per_clock_for(double seconds) const {

@@ -9,7 +9,7 @@
 namespace tridiff::ipf {
 
 PipeLayout::PipeLayout(std::ptrdiff_t size) : size_(size) {
-  if (size < 1) throw InvalidArgument("register_size", -1, -1, "must be >= 1");
+  if (size < 1) throw InvalidArgument("register_size", "must be >= 1");
   // Stages 1, 2, ..., 2^(m-1) sum to 2^m - 1; the last makes up the rest (§4's lastloopsize).
   const std::ptrdiff_t top = std::ptrdiff_t{1} << (std::bit_width(std::size_t(size)) - 1);
   for (std::ptrdiff_t length = 1; length < top; length *= 2) stages_.push_back(length);
@@ -18,8 +18,7 @@ PipeLayout::PipeLayout(std::ptrdiff_t size) : size_(size) {
 
 std::vector<bool> PipeLayout::connect(std::ptrdiff_t length) const {
   if (length < 0 || length > size_)
-    throw InvalidArgument("length", -1, -1,
-                          std::to_string(length) + " is not in [0, " + std::to_string(size_) + "]");
+    throw InvalidArgument("length", std::to_string(length) + " is not in [0, " + std::to_string(size_) + "]");
   std::vector<bool> on(stages_.size(), false);
   const std::size_t last = stages_.size() - 1;
   // The power-of-two stages alone reach 2^m - 1 = the last stage's start; beyond it, the last
@@ -65,14 +64,13 @@ std::vector<Part> vertical_parts(std::ptrdiff_t width, int parts) {
 FramePlan plan_frame(std::ptrdiff_t width, std::ptrdiff_t height, int mask, int parts,
                      std::ptrdiff_t size) {
   if (mask < 3 || mask % 2 == 0 || mask > kMaxMask)
-    throw InvalidArgument("mask", -1, -1,
-                          "must be odd and in [3, " + std::to_string(kMaxMask) + "], got " +
+    throw InvalidArgument("mask", "must be odd and in [3, " + std::to_string(kMaxMask) + "], got " +
                               std::to_string(mask));
   if (parts < 1)
-    throw InvalidArgument("parts", -1, -1, "must be >= 1, got " + std::to_string(parts));
-  if (width < 1 || height < 1) throw InvalidArgument("size", -1, -1, "frame is empty");
+    throw InvalidArgument("parts", "must be >= 1, got " + std::to_string(parts));
+  if (width < 1 || height < 1) throw InvalidArgument("size", "frame is empty");
   if (size == 0) size = register_size(width, height, mask);
-  if (size < mask) throw InvalidArgument("register_size", -1, -1, "must be >= the mask");
+  if (size < mask) throw InvalidArgument("register_size", "must be >= the mask");
   for (bool columns : {false, true}) {
     FramePlan plan;
     plan.columns = columns;
@@ -84,8 +82,7 @@ FramePlan plan_frame(std::ptrdiff_t width, std::ptrdiff_t height, int mask, int 
     plan.parts = vertical_parts(plan.scan_width, parts);
     if (plan.max_line_length() <= size) return plan;
   }
-  throw InvalidArgument("parts", -1, -1,
-                        std::to_string(parts) + " part(s) of a " + std::to_string(width) + " x " +
+  throw InvalidArgument("parts", std::to_string(parts) + " part(s) of a " + std::to_string(width) + " x " +
                             std::to_string(height) + " frame do not fit a " + std::to_string(size) +
                             "-stage register with mask " + std::to_string(mask));
 }

@@ -23,10 +23,9 @@ inline constexpr int kMaxThreads = 1024;
 // The team size for a `threads` argument: 0 is the OpenMP default (all cores, at most
 // kMaxThreads); negative and more than kMaxThreads are InvalidArgument("threads").
 inline int resolve_threads(int threads) {
-  if (threads < 0) throw InvalidArgument("threads", -1, -1, "must be >= 0 (0: all cores)");
+  if (threads < 0) throw InvalidArgument("threads", "must be >= 0 (0: all cores)");
   if (threads > kMaxThreads)
-    throw InvalidArgument("threads", -1, -1,
-                          "must be at most " + std::to_string(kMaxThreads) + ", got " +
+    throw InvalidArgument("threads", "must be at most " + std::to_string(kMaxThreads) + ", got " +
                               std::to_string(threads));
 #ifdef _OPENMP
   // 0 follows OMP_NUM_THREADS, which nothing else bounds.

@@ -66,7 +66,7 @@ class PlaneView {
   PlaneView sub(const Rect& area) const {
     if (area.x < 0 || area.y < 0 || area.width < 0 || area.height < 0 ||
         area.x + area.width > width_ || area.y + area.height > height_)
-      throw InvalidArgument("area", -1, -1, "rectangle lies outside the plane");
+      throw InvalidArgument("area", "rectangle lies outside the plane");
     return {data_ + area.y * pitch_ + area.x, area.width, area.height, pitch_};
   }
 
@@ -109,10 +109,9 @@ class Image {
   // Reallocates as width x height x channels, every value zero.
   void reset(std::ptrdiff_t width, std::ptrdiff_t height, int channels) {
     if (width < 1 || height < 1)
-      throw InvalidArgument("size", -1, -1,
-                            "image must be at least 1 x 1, got " + std::to_string(width) + " x " +
+      throw InvalidArgument("size", "image must be at least 1 x 1, got " + std::to_string(width) + " x " +
                                 std::to_string(height));
-    if (channels < 1) throw InvalidArgument("channels", -1, -1, "must be at least 1");
+    if (channels < 1) throw InvalidArgument("channels", "must be at least 1");
     width_ = width;
     height_ = height;
     channels_ = channels;
@@ -150,8 +149,7 @@ class Image {
   std::ptrdiff_t size() const { return plane_stride() * channels_; }
   void check_channel(int channel) const {
     if (channel < 0 || channel >= channels_)
-      throw InvalidArgument("channel", -1, -1,
-                            std::to_string(channel) + " is not in [0, " +
+      throw InvalidArgument("channel", std::to_string(channel) + " is not in [0, " +
                                 std::to_string(channels_) + ")");
   }
 
@@ -163,7 +161,7 @@ class Image {
 // dst = src, pixel for pixel; the views must have the same size.
 inline void copy_plane(Plane dst, ConstPlane src) {
   if (src.width() != dst.width() || src.height() != dst.height())
-    throw InvalidArgument("dst", -1, -1, "size differs from src");
+    throw InvalidArgument("dst", "size differs from src");
   for (std::ptrdiff_t y = 0; y < src.height(); ++y)
     std::memcpy(dst.row(y), src.row(y), src.width() * sizeof(float));
 }
@@ -172,8 +170,7 @@ inline void copy_plane(Plane dst, ConstPlane src) {
 inline void require_size(const Image& image, std::ptrdiff_t width, std::ptrdiff_t height,
                          const std::string& what) {
   if (image.width() != width || image.height() != height)
-    throw InvalidArgument(what, -1, -1,
-                          "is " + std::to_string(image.width()) + " x " +
+    throw InvalidArgument(what, "is " + std::to_string(image.width()) + " x " +
                               std::to_string(image.height()) + ", expected " +
                               std::to_string(width) + " x " + std::to_string(height));
 }

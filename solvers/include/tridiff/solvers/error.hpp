@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace tridiff {
 
@@ -25,6 +26,10 @@ class InvalidArgument : public Error {
         message_(message),
         system_(system),
         row_(row) {}
+
+  // A fault of the argument as a whole, not of one system or row.
+  InvalidArgument(std::string argument, const std::string& message)
+      : InvalidArgument(std::move(argument), -1, -1, message) {}
 
   const std::string& argument() const noexcept { return argument_; }
   // What is wrong, without the argument, system and row that what() puts before it.

@@ -86,8 +86,7 @@ inline constexpr auto kAllMethods = [] {
 inline const MethodRow& method_row(Method method) {
   for (const MethodRow& row : kMethodTable)
     if (row.method == method) return row;
-  throw InvalidArgument("method", -1, -1,
-                        "is not a Method (" + std::to_string(static_cast<int>(method)) + ")");
+  throw InvalidArgument("method", "is not a Method (" + std::to_string(static_cast<int>(method)) + ")");
 }
 
 inline const char* to_string(Method method) {
@@ -105,8 +104,7 @@ inline Method method_named(std::string_view name) {
     if (row.name == name) return row.method;
     known += (known.empty() ? "" : ", ") + std::string(row.name);
   }
-  throw InvalidArgument("method", -1, -1,
-                        "unknown solver method '" + std::string(name) + "' (known: " + known + ")");
+  throw InvalidArgument("method", "unknown solver method '" + std::string(name) + "' (known: " + known + ")");
 }
 
 struct SolveOptions {
@@ -144,7 +142,7 @@ inline bool fills_lanes(std::ptrdiff_t systems) {
 
 template <class T>
 void require_pointer(const T* p, const char* name) {
-  if (p == nullptr) throw InvalidArgument(name, -1, -1, "is a null pointer");
+  if (p == nullptr) throw InvalidArgument(name, "is a null pointer");
 }
 
 // The output may coincide with `input` (in place) but must not otherwise share memory with it.
@@ -157,8 +155,7 @@ void require_disjoint(const In* input, const char* input_name, const Out* output
   const auto end_in = begin_in + static_cast<std::uintptr_t>(layout.extent()) * sizeof(In);
   const auto end_out = begin_out + static_cast<std::uintptr_t>(layout.extent()) * sizeof(Out);
   if (begin_in < end_out && begin_out < end_in)
-    throw InvalidArgument("x", -1, -1,
-                          std::string("overlaps '") + input_name +
+    throw InvalidArgument("x", std::string("overlaps '") + input_name +
                               "' (only rhs may be the same array as x, for an in-place solve)");
 }
 

@@ -138,8 +138,7 @@ void for_each_band(std::ptrdiff_t bands, int threads, Body&& body) {
 }
 
 [[noreturn]] inline void throw_not_finite(std::ptrdiff_t x, std::ptrdiff_t y) {
-  throw InvalidArgument("src", -1, -1,
-                        "pixel (" + std::to_string(x) + ", " + std::to_string(y) +
+  throw InvalidArgument("src", "pixel (" + std::to_string(x) + ", " + std::to_string(y) +
                             "): is not finite");
 }
 
@@ -400,8 +399,7 @@ DiffusionReport run_pass(Direction direction, const PlaneStack<float>& dst,
 inline void require_same_size(std::ptrdiff_t width, std::ptrdiff_t height, ConstPlane other,
                               const char* what) {
   if (other.width() != width || other.height() != height)
-    throw InvalidArgument(what, -1, -1,
-                          "is " + std::to_string(other.width()) + " x " +
+    throw InvalidArgument(what, "is " + std::to_string(other.width()) + " x " +
                               std::to_string(other.height()) + ", the source is " +
                               std::to_string(width) + " x " + std::to_string(height));
 }

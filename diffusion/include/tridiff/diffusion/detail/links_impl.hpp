@@ -19,12 +19,11 @@ template <class ToLink>
     for (std::ptrdiff_t x = 0; x < value.width(); ++x) {
       const float k = to_link(value(x, y));
       if (!(k >= 0) || !std::isfinite(k))
-        throw InvalidArgument("value", -1, -1,
-                              "pixel (" + std::to_string(x) + ", " + std::to_string(y) +
+        throw InvalidArgument("value", "pixel (" + std::to_string(x) + ", " + std::to_string(y) +
                                   "): " + std::to_string(value(x, y)) + " maps to conductance " +
                                   std::to_string(k) + "; it must be finite and >= 0");
     }
-  throw InvalidArgument("value", -1, -1, "a conductance is not finite and >= 0");
+  throw InvalidArgument("value", "a conductance is not finite and >= 0");
 }
 
 template <class ToLink>
