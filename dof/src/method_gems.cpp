@@ -84,6 +84,7 @@
 #include "tridiff/dof/tiles.hpp"
 #include "tridiff/solvers/solve.hpp"
 #include "stage_clock.hpp"
+#include "frame.hpp"
 
 namespace tridiff {
 namespace {
@@ -260,18 +261,17 @@ void downsample(const Image& color, ConstPlane coc, float point_below, float max
 
 namespace dof_detail {
 
-void run_gems(Image& out, const Image& color, ConstPlane coc, const DofSettings& settings,
-              DofReport& report) {
-  validate_dof_input(color, coc);
-  const int team = detail::resolve_threads(settings.threads);
+void run_gems(Image& out, const DofFrame& frame, const DofSettings& settings, DofReport& report) {
+  const Image& color = frame.color();
+  const ConstPlane coc = frame.coc();
+  const int team = frame.threads();
   const std::ptrdiff_t width = color.width(), height = color.height();
   const int channels = color.channels();
-  const float point_below = sharp_below_px(settings.in_focus_coc_px);
+  const float point_below = frame.sharp_below();
   using Clock = StageClock;
 
   auto start = Clock::now();
   out.reset(width, height, channels);
-  const TileMap frame(coc, point_below, TileMap::kDefaultTile, 0, team);
   const float top = std::min(frame.max_radius(), kMaxRadius);  // the seed's max blur radius R
   if (top <= 0) {  // every pixel sharp: the input, bit for bit
     for (int c = 0; c < channels; ++c) copy_plane(color.plane(c), out.plane(c));
@@ -298,7 +298,7 @@ void run_gems(Image& out, const Image& color, ConstPlane coc, const DofSettings&
   // themselves. The TileMap adds the margin to every disc (conservative for the far ones).
   const std::ptrdiff_t margin = near ? kBlock * (gaussian_reach + 1) + 5 : 0;
   const TileMap tiles =
-      margin > 0 ? TileMap(coc, point_below, TileMap::kDefaultTile, margin, team) : frame;
+      margin > 0 ? TileMap(coc, point_below, TileMap::kDefaultTile, margin, team) : frame.tiles();
   report.stages.push_back({"classify", seconds_since(start)});
 
   // Steps 1-4 on the quarter grid.

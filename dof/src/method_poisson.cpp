@@ -81,6 +81,7 @@
 #include "tridiff/dof/tiles.hpp"
 #include "tridiff/solvers/solve.hpp"
 #include "stage_clock.hpp"
+#include "frame.hpp"
 
 namespace tridiff {
 namespace {
@@ -435,17 +436,18 @@ void gather_pixel(Image& out, const Image& color, ConstPlane coc, std::ptrdiff_t
 
 namespace dof_detail {
 
-void run_poisson(Image& out, const Image& color, ConstPlane coc, const DofSettings& settings,
+void run_poisson(Image& out, const DofFrame& frame, const DofSettings& settings,
                  DofReport& report) {
-  validate_dof_input(color, coc);
-  const int team = detail::resolve_threads(settings.threads);
+  const Image& color = frame.color();
+  const ConstPlane coc = frame.coc();
+  const int team = frame.threads();
   const std::ptrdiff_t width = color.width(), height = color.height();
   const int channels = color.channels();
-  const float point_below = sharp_below_px(settings.in_focus_coc_px);
+  const float point_below = frame.sharp_below();
   using Clock = StageClock;
 
   auto start = Clock::now();
-  const TileMap tiles(coc, point_below, TileMap::kDefaultTile, 0, team);
+  const TileMap& tiles = frame.tiles();
   out.reset(width, height, channels);
   report.stages.push_back({"tiles", seconds_since(start)});
 

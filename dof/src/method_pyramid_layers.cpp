@@ -81,6 +81,7 @@
 #include "tridiff/dof/tiles.hpp"
 #include "tridiff/solvers/solve.hpp"
 #include "stage_clock.hpp"
+#include "frame.hpp"
 
 namespace tridiff {
 namespace {
@@ -155,13 +156,14 @@ void blur_layer_plane(ConstPlane in, Plane out, double sigma, int threads) {
 
 namespace dof_detail {
 
-void run_pyramid_layers(Image& out, const Image& color, ConstPlane coc,
-                        const DofSettings& settings, DofReport& report) {
-  validate_dof_input(color, coc);
-  const int team = detail::resolve_threads(settings.threads);
+void run_pyramid_layers(Image& out, const DofFrame& frame, const DofSettings& settings,
+                        DofReport& report) {
+  const Image& color = frame.color();
+  const ConstPlane coc = frame.coc();
+  const int team = frame.threads();
   const std::ptrdiff_t width = color.width(), height = color.height();
   const int channels = color.channels();
-  const float sharp_below = sharp_below_px(settings.in_focus_coc_px);
+  const float sharp_below = frame.sharp_below();
   const bool skip = settings.skip_in_focus;
   using Clock = StageClock;
 

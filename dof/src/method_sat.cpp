@@ -76,6 +76,7 @@
 #include "tridiff/dof/method.hpp"
 #include "tridiff/dof/tiles.hpp"
 #include "tridiff/solvers/solve.hpp"
+#include "frame.hpp"
 
 namespace tridiff {
 namespace {
@@ -243,12 +244,13 @@ struct Common {
   bool skip;
 };
 
-Common prepare(Image& out, const Image& color, ConstPlane coc, const DofSettings& settings,
+Common prepare(Image& out, const DofFrame& frame, const DofSettings& settings,
                DofReport& report) {
-  validate_dof_input(color, coc);
+  const Image& color = frame.color();
+  const ConstPlane coc = frame.coc();
   const auto start = Clock::now();
-  const int team = detail::resolve_threads(settings.threads);
-  const float sharp_below = sharp_below_px(settings.in_focus_coc_px);
+  const int team = frame.threads();
+  const float sharp_below = frame.sharp_below();
   Common common{team, sharp_below,
                 TileMap(coc, sharp_below, TileMap::kDefaultTile, kHalfResMargin, team),
                 settings.skip_in_focus};
@@ -267,9 +269,10 @@ std::string size_note(const Image& color) {
 
 namespace dof_detail {
 
-void run_sat(Image& out, const Image& color, ConstPlane coc, const DofSettings& settings,
-             DofReport& report) {
-  const Common common = prepare(out, color, coc, settings, report);
+void run_sat(Image& out, const DofFrame& frame, const DofSettings& settings, DofReport& report) {
+  const Image& color = frame.color();
+  const ConstPlane coc = frame.coc();
+  const Common common = prepare(out, frame, settings, report);
   const int channels = color.channels();
   const bool any_blur = common.tiles.max_radius() > 0;
 
@@ -302,9 +305,11 @@ void run_sat(Image& out, const Image& color, ConstPlane coc, const DofSettings& 
   if (settings.progress) settings.progress(1.0);
 }
 
-void run_sat_layers(Image& out, const Image& color, ConstPlane coc, const DofSettings& settings,
+void run_sat_layers(Image& out, const DofFrame& frame, const DofSettings& settings,
                     DofReport& report) {
-  const Common common = prepare(out, color, coc, settings, report);
+  const Image& color = frame.color();
+  const ConstPlane coc = frame.coc();
+  const Common common = prepare(out, frame, settings, report);
   const int channels = color.channels();
   const std::ptrdiff_t width = color.width(), height = color.height();
   const float sharp_below = common.sharp_below;

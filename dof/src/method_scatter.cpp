@@ -60,6 +60,7 @@
 #include "tridiff/dof/tiles.hpp"
 #include "tridiff/solvers/solve.hpp"
 #include "stage_clock.hpp"
+#include "frame.hpp"
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -147,13 +148,14 @@ struct Box {
 
 namespace dof_detail {
 
-void run_scatter(Image& out, const Image& color, ConstPlane coc, const DofSettings& settings,
+void run_scatter(Image& out, const DofFrame& frame, const DofSettings& settings,
                  DofReport& report) {
-  validate_dof_input(color, coc);
-  const int team = detail::resolve_threads(settings.threads);
+  const Image& color = frame.color();
+  const ConstPlane coc = frame.coc();
+  const int team = frame.threads();
   const std::ptrdiff_t width = color.width(), height = color.height();
   const int channels = color.channels();
-  const float point_below = sharp_below_px(settings.in_focus_coc_px);
+  const float point_below = frame.sharp_below();
   if (width * height > std::numeric_limits<std::int32_t>::max())
     throw InvalidArgument("color", -1, -1, "has more than 2^31 pixels");
   // A disc beyond kMaxDiameter px would take hours; refuse it rather than clamp it silently.
