@@ -226,10 +226,10 @@ void small_blur_span(const std::array<const float*, 5>& rows, std::ptrdiff_t wid
 }
 
 // Step 1: the block means of every channel and (near_out non-empty) the block's largest near
-// radius, clamped to max_radius; a pixel is near when c <= -point_below. The blocks of the last
+// radius, clamped to max_radius; a pixel is near by focus.is_near. The blocks of the last
 // row and column reach past the frame into its mirror image, so every block holds 16 pixels
 // centred on 4j + 1.5 as the upsampling assumes.
-void downsample(const Image& color, ConstPlane coc, float point_below, float max_radius,
+void downsample(const Image& color, ConstPlane coc, FocusTest focus, float max_radius,
                 Image& mean, Plane near_out, int threads) {
   const std::ptrdiff_t width = color.width(), height = color.height();
   const std::ptrdiff_t qw = mean.width(), qh = mean.height();
@@ -256,7 +256,7 @@ void downsample(const Image& color, ConstPlane coc, float point_below, float max
       for (const std::ptrdiff_t y : rows)
         for (std::ptrdiff_t k = 0; k < kBlock; ++k) {
           const float c = coc(cols[k], y);
-          if (c <= -point_below) largest = std::max(largest, -0.5f * c);
+          if (focus.is_near(c)) largest = std::max(largest, -0.5f * c);
         }
       near_out(i, j) = std::min(largest, max_radius);
     }
@@ -312,7 +312,7 @@ QuarterGrid quarter_grid(const DofFrame& frame, const Plan& plan, Stages& stages
   grid.height = qh;
   Image mean(qw, qh, channels), near_coc;
   if (plan.near) near_coc.reset(qw, qh, 1);
-  downsample(color, frame.coc(), frame.sharp_below(), plan.top, mean,
+  downsample(color, frame.coc(), frame.focus(), plan.top, mean,
              plan.near ? near_coc.plane(0) : Plane(), team);
   stages.end("downsample");
 
@@ -369,7 +369,7 @@ void blend_row(Image& out, const DofFrame& frame, const Plan& plan, const Quarte
                RowScratch& scratch) {
   const Image& color = frame.color();
   const std::ptrdiff_t width = color.width(), height = color.height();
-  const float point_below = frame.sharp_below();
+  const FocusTest focus = frame.focus();
   const bool near = plan.near;
   auto& [weight, level, blurred, quarter_row] = scratch;
   float* near_row = level[0].data();  // free until the channels' pass
@@ -383,7 +383,7 @@ void blend_row(Image& out, const DofFrame& frame, const Plan& plan, const Quarte
     for (std::ptrdiff_t x = x0; x < x1; ++x) {
       const auto i = std::size_t(x);
       const float c = coc_row[x];
-      const float far = c >= point_below ? 0.5f * c : 0.f;
+      const float far = focus.is_far(c) ? 0.5f * c : 0.f;
       // Radii above the top node would extrapolate; clamp there (the top node is R when used).
       const float r = std::min(std::max(far, near ? near_row[i] : 0.f), plan.top);
       blurred[i] = r > 0;

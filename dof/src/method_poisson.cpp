@@ -229,7 +229,7 @@ struct Level {
   float variance = 0;  // per axis, of the blur and the bilinear read together
 };
 
-Level build_level(const Image& color, ConstPlane coc, float point_below, double sigma,
+Level build_level(const Image& color, ConstPlane coc, FocusTest focus, double sigma,
                   int threads) {
   const std::ptrdiff_t width = color.width(), height = color.height();
   Level level;
@@ -252,7 +252,7 @@ Level build_level(const Image& color, ConstPlane coc, float point_below, double 
                        rows = (2 * height - 1) / (2 * spacing) + 3;
   level.samples.reset(cols, rows, color.channels());
   auto mask_of = [&](std::ptrdiff_t x, std::ptrdiff_t y) {
-    return std::fabs(coc(fold_index(x, width), fold_index(y, height))) >= point_below
+    return !focus.is_sharp(coc(fold_index(x, width), fold_index(y, height)))
                ? 1.f
                : kSharpMask;
   };
@@ -375,11 +375,11 @@ inline float read(const float* plane, std::ptrdiff_t pitch, const Bilinear& b) {
 // The gather of one pixel (x, y) of signed CoC c into out (every channel). A sharp pixel keeps
 // its value. This is the whole per-pixel mathematics; the driver below only traverses.
 void gather_pixel(Image& out, const Image& color, ConstPlane coc, std::ptrdiff_t x,
-                  std::ptrdiff_t y, float point_below, const std::vector<Level>& levels) {
+                  std::ptrdiff_t y, FocusTest focus, const std::vector<Level>& levels) {
   const std::ptrdiff_t width = color.width(), height = color.height();
   const float c = coc(x, y);
   const int channels = color.channels();
-  if (!(std::fabs(c) >= point_below)) {
+  if (focus.is_sharp(c)) {
     for (int ch = 0; ch < channels; ++ch) out(x, y, ch) = color(x, y, ch);
     return;
   }
@@ -401,7 +401,7 @@ void gather_pixel(Image& out, const Image& color, ConstPlane coc, std::ptrdiff_t
     float w = 0;
     if (i == 0) {
       w = 1;  // the pixel itself
-    } else if (neighbour >= point_below) {
+    } else if (!focus.is_sharp(neighbour)) {
       const float r = std::min(0.5f * neighbour, kMaxRadius);
       const float area = r > radius ? (radius / r) * (radius / r) : 1.f;
       w = std::clamp(r + 1 - radius * pattern.radius[i], 0.f, 1.f) * area;
@@ -441,16 +441,16 @@ std::vector<Level> build_levels(const DofFrame& frame) {
   if (!(max_radius > 0)) return levels;
   const Image& color = frame.color();
   const ConstPlane coc = frame.coc();
-  const float point_below = frame.sharp_below();
+  const FocusTest focus = frame.focus();
   const int team = frame.threads();
   const TapPattern& pattern = tap_pattern();
   const float ratio =
       *std::max_element(pattern.alias_ratio.begin() + kMinQuads, pattern.alias_ratio.end());
   const float needed = std::max(kBilinearVariance, scatter_disc_variance()(max_radius) * ratio);
   const double cap = std::min(kMaxLevelSigma, 2.0 * double(std::max(color.width(), color.height())));
-  levels.push_back(build_level(color, coc, point_below, 0, team));
+  levels.push_back(build_level(color, coc, focus, 0, team));
   for (double sigma = 1; levels.back().variance < needed && sigma <= cap; sigma *= 2)
-    levels.push_back(build_level(color, coc, point_below, sigma, team));
+    levels.push_back(build_level(color, coc, focus, sigma, team));
   return levels;
 }
 
@@ -490,7 +490,7 @@ void run_poisson(Image& out, const DofFrame& frame, const DofSettings& settings,
         }
         for (std::ptrdiff_t y = area.y; y < area.y + area.height; ++y)
           for (std::ptrdiff_t x = area.x; x < area.x + area.width; ++x)
-            gather_pixel(out, color, frame.coc(), x, y, frame.sharp_below(), levels);
+            gather_pixel(out, color, frame.coc(), x, y, frame.focus(), levels);
         return 0;
       });
   gather.copy_the_rest(out, color);
