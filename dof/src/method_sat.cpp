@@ -228,6 +228,102 @@ std::string size_note(const Image& color) {
          std::to_string((color.height() + 1) / 2) + ", replicate border, 3 boxes a pixel";
 }
 
+// The two layers' tables at half resolution: per layer channels x α C, then α, then α R.
+struct LayerTables {
+  std::vector<SummedAreaTable> far, near;  // empty: the layer is left out
+  std::size_t alpha = 0;                   // the index of α (the channel count)
+  std::ptrdiff_t cells_x = 0, cells_y = 0;
+};
+
+LayerTables layer_tables(const DofFrame& frame, bool has_far, bool has_near) {
+  const Image& color = frame.color();
+  const ConstPlane coc = frame.coc();
+  const int channels = color.channels(), team = frame.threads();
+  const std::ptrdiff_t width = color.width(), height = color.height();
+  const FocusTest focus = frame.focus();
+  LayerTables tables;
+  tables.alpha = std::size_t(channels);
+  tables.cells_x = (width + 1) / 2;
+  tables.cells_y = (height + 1) / 2;
+  if (has_far)
+    tables.far = build_tables(half_resolution(width, height, channels + 2, team,
+                                              [&](int k, std::ptrdiff_t x, std::ptrdiff_t y) {
+                                                const float c = coc(x, y);
+                                                if (!focus.is_far(c)) return 0.f;
+                                                if (k < channels) return color(x, y, k);
+                                                return k == channels ? 1.f : 0.5f * c;
+                                              }),
+                              team);
+  if (has_near)
+    tables.near = build_tables(half_resolution(width, height, channels + 2, team,
+                                               [&](int k, std::ptrdiff_t x, std::ptrdiff_t y) {
+                                                 const float c = coc(x, y);
+                                                 if (!focus.is_near(c)) return 0.f;
+                                                 if (k < channels) return color(x, y, k);
+                                                 return k == channels ? 1.f : -0.5f * c;
+                                               }),
+                               team);
+  return tables;
+}
+
+// sat-layers at pixel (x, y) of `tile`: the base (the pixel, or the far layer), the near layer
+// over it, renormalised by the union of their coverages.
+void composite_pixel(Image& out, const DofFrame& frame, const LayerTables& tables,
+                     std::ptrdiff_t x, std::ptrdiff_t y, const TileInfo& tile) {
+  const Image& color = frame.color();
+  const int channels = color.channels();
+  const FocusTest focus = frame.focus();
+  const float sharp_below = focus.sharp_below;
+  const std::vector<SummedAreaTable>& far = tables.far;
+  const std::vector<SummedAreaTable>& near = tables.near;
+  const std::size_t alpha = tables.alpha;
+  const std::ptrdiff_t cells_x = tables.cells_x, cells_y = tables.cells_y;
+  const bool has_near = !near.empty();
+  const float c = frame.coc()(x, y);
+  const double radius = 0.5 * std::fabs(double(c));
+  const bool sharp = focus.is_sharp(c);
+  // The base: the pixel itself, or the far layer normalised by its coverage, read with
+  // the pixel's radius, or behind a near pixel with the radius of the far pixels around.
+  ThreeBoxes back;
+  double back_cover = 0;
+  if (!sharp && !far.empty()) {
+    double back_radius = radius;
+    const bool found = c > 0 || layer_radius(far, alpha, x, y, tile.reach_radius,
+                                             0.5 * double(sharp_below), back_radius);
+    if (found) {
+      back = ThreeBoxes(x, y, back_radius, cells_x, cells_y);
+      if (back.any_coverage(far[alpha])) back_cover = back.mean(far[alpha]);
+    }
+  }
+  const bool has_base = sharp || back_cover > kMinCoverage;
+  // The near layer, in tiles that a near disc reaches.
+  ThreeBoxes front;
+  double front_cover = 0;
+  double front_radius = 0;
+  if (has_near && tile.near_reach_radius > 0 &&
+      layer_radius(near, alpha, x, y, tile.near_reach_radius, 0.5 * double(sharp_below),
+                   front_radius)) {
+    front = ThreeBoxes(x, y, front_radius, cells_x, cells_y);
+    if (front.any_coverage(near[alpha]))
+      front_cover = std::min(front.mean(near[alpha]), 1.0);
+  }
+  const bool has_front = front_cover > kMinCoverage;
+  // Near over the base with the coverages as alphas, renormalised by their union (what
+  // `scatter` does): continuous where the far coverage behind a near edge fades out.
+  const double base_alpha = sharp ? 1.0 : has_base ? std::min(back_cover, 1.0) : 0.0;
+  const double total = front_cover + (1 - front_cover) * base_alpha;
+  for (int ch = 0; ch < channels; ++ch) {
+    const std::size_t k = std::size_t(ch);
+    double v = sharp ? double(color(x, y, ch)) : 0.0;
+    if (!sharp && has_base) v = back.mean(far[k]) / back_cover;
+    if (has_front)
+      v = (front.mean(near[k]) + (1 - front_cover) * (has_base ? base_alpha * v : 0.0)) /
+          total;
+    // Neither layer in reach happens only through rounding: keep the input.
+    out(x, y, ch) = has_base || has_front ? static_cast<float>(v) : color(x, y, ch);
+  }
+}
+
 }  // namespace
 
 namespace dof_detail {
@@ -271,88 +367,17 @@ void run_sat(Image& out, const DofFrame& frame, const DofSettings& settings, Dof
 void run_sat_layers(Image& out, const DofFrame& frame, const DofSettings& settings,
                     DofReport& report) {
   const Image& color = frame.color();
-  const ConstPlane coc = frame.coc();
-  const int channels = color.channels(), team = frame.threads();
-  const std::ptrdiff_t width = color.width(), height = color.height();
-  const FocusTest focus = frame.focus();
-  const float sharp_below = focus.sharp_below;
   Stages stages(report);
   const TileMap tiles = prepare(out, frame, stages);
-  const TiledGather gather(tiles, settings.skip_in_focus, team);
+  const TiledGather gather(tiles, settings.skip_in_focus, frame.threads());
   report.skipped_fraction = gather.skipped_fraction();
   const bool has_near = tiles.has_near();
-  const bool has_far = tiles.has_far() || !gather.skip();
-
-  // Per layer the tables of channels x α C, then α, then α R.
-  std::vector<SummedAreaTable> far, near;
-  if (has_far)
-    far = build_tables(half_resolution(width, height, channels + 2, team,
-                                       [&](int k, std::ptrdiff_t x, std::ptrdiff_t y) {
-                                         const float c = coc(x, y);
-                                         if (!focus.is_far(c)) return 0.f;
-                                         if (k < channels) return color(x, y, k);
-                                         return k == channels ? 1.f : 0.5f * c;
-                                       }),
-                       team);
-  if (has_near)
-    near = build_tables(half_resolution(width, height, channels + 2, team,
-                                        [&](int k, std::ptrdiff_t x, std::ptrdiff_t y) {
-                                          const float c = coc(x, y);
-                                          if (!focus.is_near(c)) return 0.f;
-                                          if (k < channels) return color(x, y, k);
-                                          return k == channels ? 1.f : -0.5f * c;
-                                        }),
-                        team);
+  const LayerTables tables = layer_tables(frame, tiles.has_far() || !gather.skip(), has_near);
   stages.end("half-resolution tables");
 
-  const std::ptrdiff_t cells_x = (width + 1) / 2, cells_y = (height + 1) / 2;
-  const std::size_t alpha = std::size_t(channels);
-  gather.for_each_pixel(
-      [&](std::ptrdiff_t x, std::ptrdiff_t y, const TileInfo& tile) {
-        const float c = coc(x, y);
-        const double radius = 0.5 * std::fabs(double(c));
-        const bool sharp = focus.is_sharp(c);
-        // The base: the pixel itself, or the far layer normalised by its coverage, read with
-        // the pixel's radius, or behind a near pixel with the radius of the far pixels around.
-        ThreeBoxes back;
-        double back_cover = 0;
-        if (!sharp && !far.empty()) {
-          double back_radius = radius;
-          const bool found = c > 0 || layer_radius(far, alpha, x, y, tile.reach_radius,
-                                                   0.5 * double(sharp_below), back_radius);
-          if (found) {
-            back = ThreeBoxes(x, y, back_radius, cells_x, cells_y);
-            if (back.any_coverage(far[alpha])) back_cover = back.mean(far[alpha]);
-          }
-        }
-        const bool has_base = sharp || back_cover > kMinCoverage;
-        // The near layer, in tiles that a near disc reaches.
-        ThreeBoxes front;
-        double front_cover = 0;
-        double front_radius = 0;
-        if (has_near && tile.near_reach_radius > 0 &&
-            layer_radius(near, alpha, x, y, tile.near_reach_radius, 0.5 * double(sharp_below),
-                         front_radius)) {
-          front = ThreeBoxes(x, y, front_radius, cells_x, cells_y);
-          if (front.any_coverage(near[alpha]))
-            front_cover = std::min(front.mean(near[alpha]), 1.0);
-        }
-        const bool has_front = front_cover > kMinCoverage;
-        // Near over the base with the coverages as alphas, renormalised by their union (what
-        // `scatter` does): continuous where the far coverage behind a near edge fades out.
-        const double base_alpha = sharp ? 1.0 : has_base ? std::min(back_cover, 1.0) : 0.0;
-        const double total = front_cover + (1 - front_cover) * base_alpha;
-        for (int ch = 0; ch < channels; ++ch) {
-          const std::size_t k = std::size_t(ch);
-          double v = sharp ? double(color(x, y, ch)) : 0.0;
-          if (!sharp && has_base) v = back.mean(far[k]) / back_cover;
-          if (has_front)
-            v = (front.mean(near[k]) + (1 - front_cover) * (has_base ? base_alpha * v : 0.0)) /
-                total;
-          // Neither layer in reach happens only through rounding: keep the input.
-          out(x, y, ch) = has_base || has_front ? static_cast<float>(v) : color(x, y, ch);
-        }
-      });
+  gather.for_each_pixel([&](std::ptrdiff_t x, std::ptrdiff_t y, const TileInfo& tile) {
+    composite_pixel(out, frame, tables, x, y, tile);
+  });
   gather.copy_the_rest(out, color);
   stages.end("gather and composite");
   report.layered = has_near;
