@@ -883,6 +883,25 @@ TEST(DofInput, DiffusionNamesTheCocWhoseConductanceOverflows) {
     }
 }
 
+// The frame is checked before a method starts: a refused input leaves the output as it was.
+TEST(DofInput, RefusedInputLeavesTheOutputUntouched) {
+  Image color = random_image(40, 30, 3, 0.f, 1.f, 3);
+  const Image coc = make_coc(40, 30, [](auto x, auto) { return float(x % 9) - 4.f; });
+  color(39, 29, 2) = kNaN;  // the last value a method would reach
+  const Image before = random_image(40, 30, 3, 0.f, 1.f, 8);
+  for (const DofMethod& method : dof_methods()) {
+    Image out = before;
+    DofReport report;
+    EXPECT_THROW(method.run(out, color, coc.plane(0), {}, report), InvalidArgument) << method.name;
+    std::ptrdiff_t changed = 0;
+    for (int ch = 0; ch < 3; ++ch)
+      for (std::ptrdiff_t y = 0; y < 30; ++y)
+        for (std::ptrdiff_t x = 0; x < 40; ++x)
+          changed += !same_bits(out(x, y, ch), before(x, y, ch));
+    EXPECT_EQ(changed, 0) << method.name;
+  }
+}
+
 TEST(DofInput, NonFiniteCocNamesThePixel) {
   const Image color = random_image(40, 30, 3, 0.f, 1.f, 3);
   Image coc = make_coc(40, 30, [](auto, auto) { return 3.f; });

@@ -1,7 +1,8 @@
 // Depth-of-field methods and their registry: every method is registered once (name, what it
 // handles, its cost) so that the command line, the tests and the benchmarks enumerate the same
 // list. Adding a method is one new file (its DofKernel), one entry in registry.cpp's kMethods
-// and one line in dof/CMakeLists.txt; the registry checks and analyses the frame for it.
+// (with the kernel's declaration beside the others) and one line in dof/CMakeLists.txt; the
+// registry checks and analyses the frame for it.
 #pragma once
 
 #include <functional>
