@@ -121,6 +121,21 @@ TEST(DofAuto, CostScalesWithWorkAndForBoundedMethodsWithTheRadiusSquared) {
   EXPECT_NE(choice.reason.find("ipf (160 ms"), std::string::npos) << choice.reason;
 }
 
+// `auto` chooses from the frame's tiles (analysed once, then handed to the chosen method): the
+// same choice as from the CoC map itself.
+TEST(DofAuto, ChoiceFromTheFrameTilesIsTheChoiceFromTheCoc) {
+  const Image coc = far_half_coc();
+  for (const double budget : {10.0, 30.0, 60.0}) {
+    DofSettings settings;
+    settings.error_budget_psnr = budget;
+    const TileMap tiles(coc.plane(0), sharp_below_px(settings.in_focus_coc_px));
+    const MethodChoice a = choose_dof_method(coc.plane(0), settings, builtin_method_table());
+    const MethodChoice b = choose_dof_method(tiles, settings, builtin_method_table());
+    EXPECT_EQ(a.method, b.method);
+    EXPECT_EQ(a.reason, b.reason);
+  }
+}
+
 TEST(DofAuto, TableWithoutRegisteredMethodsIsRejected) {
   const std::vector<MethodTableRow> table = {row("nonesuch", "far", false, 2, 0.5, 0.01, 35)};
   EXPECT_THROW(choose_dof_method(far_half_coc().plane(0), {}, table), InvalidArgument);

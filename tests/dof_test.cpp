@@ -375,6 +375,11 @@ TEST(DofRegistry, ListsAdiAndMpadWithSummaries) {
   EXPECT_TRUE(find_dof_method("adi").unbounded_blur);
 }
 
+// A registry entry is a description and a kernel; `run` checks the frame and calls the kernel.
+TEST(DofRegistry, EveryMethodHasAKernel) {
+  for (const DofMethod& m : dof_methods()) EXPECT_NE(m.kernel, nullptr) << m.name;
+}
+
 TEST(DofRegistry, UnknownNameListsKnownMethods) {
   const Thrown t = invalid_argument_of([] { find_dof_method("nope"); });
   EXPECT_TRUE(contains(t.message, "nope"));
@@ -844,6 +849,57 @@ TEST(DofInput, NanColourNamesThePixel) {
       const Thrown t = invalid_argument_of([&] { run(method, color, coc, settings); });
       EXPECT_TRUE(contains(t.message, "pixel (17, 23)")) << method.name;
     }
+}
+
+// The frame is checked before any method runs, so every method names a bad colour value as
+// the colour's (the diffusion methods once named it as their operator's "src").
+TEST(DofInput, EveryMethodNamesANonFiniteColourAsTheColour) {
+  Image color = random_image(40, 30, 3, 0.f, 1.f, 3);
+  const Image coc = make_coc(40, 30, [](auto x, auto) { return float(x % 7) - 3.f; });
+  color(17, 23, 1) = kNaN;
+  for (const DofMethod& method : dof_methods())
+    for (bool layers : {false, true}) {
+      DofSettings settings;
+      settings.layers = layers;
+      const Thrown t = invalid_argument_of([&] { run(method, color, coc, settings); });
+      EXPECT_EQ(t.argument, "color") << method.name;
+      EXPECT_TRUE(contains(t.message, "pixel (17, 23), channel 1")) << method.name << t.message;
+    }
+}
+
+// A finite CoC whose conductance is not (|CoC| ~ 1e20 px) is named at its own pixel, with and
+// without layers (the layered fill once blamed the first pixel of the frame).
+TEST(DofInput, DiffusionNamesTheCocWhoseConductanceOverflows) {
+  const Image color = random_image(70, 40, 3, 0.f, 1.f, 4);
+  Image coc = make_coc(70, 40, [](auto x, auto) { return x < 35 ? -3.f : 3.f; });
+  coc(66, 38, 0) = -1e20f;
+  for (const char* name : {"adi", "mpad", "auto"})
+    for (bool layers : {false, true}) {
+      DofSettings settings;
+      settings.layers = layers;
+      const Thrown t = invalid_argument_of([&] { run(find_dof_method(name), color, coc, settings); });
+      EXPECT_EQ(t.argument, "coc") << name;
+      EXPECT_TRUE(contains(t.message, "pixel (66, 38)")) << name << " " << t.message;
+    }
+}
+
+// The frame is checked before a method starts: a refused input leaves the output as it was.
+TEST(DofInput, RefusedInputLeavesTheOutputUntouched) {
+  Image color = random_image(40, 30, 3, 0.f, 1.f, 3);
+  const Image coc = make_coc(40, 30, [](auto x, auto) { return float(x % 9) - 4.f; });
+  color(39, 29, 2) = kNaN;  // the last value a method would reach
+  const Image before = random_image(40, 30, 3, 0.f, 1.f, 8);
+  for (const DofMethod& method : dof_methods()) {
+    Image out = before;
+    DofReport report;
+    EXPECT_THROW(method.run(out, color, coc.plane(0), {}, report), InvalidArgument) << method.name;
+    std::ptrdiff_t changed = 0;
+    for (int ch = 0; ch < 3; ++ch)
+      for (std::ptrdiff_t y = 0; y < 30; ++y)
+        for (std::ptrdiff_t x = 0; x < 40; ++x)
+          changed += !same_bits(out(x, y, ch), before(x, y, ch));
+    EXPECT_EQ(changed, 0) << method.name;
+  }
 }
 
 TEST(DofInput, NonFiniteCocNamesThePixel) {

@@ -128,6 +128,33 @@ TEST(DofTiles, CopyUnreachedTilesWritesOnlyThoseTiles) {
     }
 }
 
+// One definition of "in focus": every finite CoC is exactly one of sharp, near and far, and the
+// tiles are classified by the same predicate (TileMap::focus()).
+TEST(DofTiles, FocusTestIsTheTileClassification) {
+  for (const float in_focus : {1.f, 2.5f}) {
+    const Image coc = sparse_coc(97, 61, 12.f, 7);
+    const TileMap tiles(coc.plane(0), in_focus, 16);
+    const FocusTest focus = tiles.focus();
+    EXPECT_EQ(focus.sharp_below, in_focus);
+    for (std::ptrdiff_t ty = 0; ty < tiles.tiles_y(); ++ty)
+      for (std::ptrdiff_t tx = 0; tx < tiles.tiles_x(); ++tx) {
+        const Rect area = tiles.rect(tx, ty);
+        bool near = false, far = false;
+        for (std::ptrdiff_t y = area.y; y < area.y + area.height; ++y)
+          for (std::ptrdiff_t x = area.x; x < area.x + area.width; ++x) {
+            const float c = coc(x, y, 0);
+            ASSERT_EQ(int(focus.is_sharp(c)) + int(focus.is_near(c)) + int(focus.is_far(c)), 1)
+                << c;
+            near = near || focus.is_near(c);
+            far = far || focus.is_far(c);
+          }
+        const TileKind kind = tiles.at(tx, ty).kind;
+        EXPECT_EQ(near, kind == TileKind::near || kind == TileKind::mixed);
+        EXPECT_EQ(far, kind == TileKind::far || kind == TileKind::mixed);
+      }
+  }
+}
+
 TEST(DofTiles, BadArgumentsAreNamed) {
   const Image coc(10, 10, 1);
   EXPECT_THROW(TileMap(coc.plane(0), 1.f, 0), InvalidArgument);

@@ -2,14 +2,19 @@
 // runs) and error against the scatter reference — and writes the table that `--method auto`
 // chooses from (auto.hpp; dof/data/method_table.csv). Run through scripts/dof_method_table.sh.
 //
-//   tridiff_dof_method_table [--size N] [--threads T] [--output FILE]
+//   tridiff_dof_method_table [--size N] [--threads T] [--output FILE] [--method NAME]...
 //
 // Defaults: 1024 x 1024 (large enough that a frame no longer fits in the caches, as real ones
-// do not), 2 threads, stdout. The scenes' CoC budgets do not scale with the frame
+// do not), 2 threads, stdout. --method (repeatable) measures only the methods named and
+// replaces their rows in the table at --output (read first; its other rows, their order and its
+// comment lines are kept); --size and --threads then default to the size and threads of the
+// rows they replace, so that the table stays measured alike. The scenes' CoC budgets do not scale with the frame
 // (scenes.hpp), so per-pixel cost and error carry over to other sizes; the procedural scene's
 // thin-lens CoC does scale, and its rows record the radius they were measured at.
 #include <algorithm>
 #include <chrono>
+#include <iterator>
+#include <sstream>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -42,16 +47,45 @@ double run_seconds(const DofMethod& method, const DofScene& scene, const DofSett
 }
 
 int usage() {
-  std::fputs("usage: tridiff_dof_method_table [--size N] [--threads T] [--output FILE]\n", stderr);
+  std::fputs(
+      "usage: tridiff_dof_method_table [--size N] [--threads T] [--output FILE] "
+      "[--method NAME]...\n",
+      stderr);
   return 2;
 }
 
-}  // namespace
+// The table already at `path` (empty if there is none) and its leading comment lines.
+std::vector<MethodTableRow> read_table(const std::string& path, std::string& comments) {
+  std::ifstream file(path);
+  if (!file) return {};
+  const std::string csv((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+  std::istringstream lines(csv);
+  for (std::string line; std::getline(lines, line) && line.rfind("#", 0) == 0;)
+    comments += line + "\n";
+  return parse_method_table(csv);
+}
 
-int main(int argc, char** argv) {
-  std::ptrdiff_t size = 1024;
-  int threads = 2;
+// The rows measured, put in place of the rows of the same method and scene in `table`; rows
+// for a scene the table lacks are added at its end.
+std::vector<MethodTableRow> replace_rows(std::vector<MethodTableRow> table,
+                                         const std::vector<MethodTableRow>& measured) {
+  for (const MethodTableRow& row : measured) {
+    auto same = std::find_if(table.begin(), table.end(), [&](const MethodTableRow& old) {
+      return old.method == row.method && old.scene == row.scene;
+    });
+    if (same != table.end())
+      *same = row;
+    else
+      table.push_back(row);
+  }
+  return table;
+}
+
+int measure(int argc, char** argv) {
+  std::ptrdiff_t size = 0;
+  int threads = 0;
   std::string output;
+  std::vector<std::string> only;  // --method: these methods alone
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (i + 1 >= argc) return usage();
@@ -61,10 +95,39 @@ int main(int argc, char** argv) {
       threads = std::atoi(argv[++i]);
     else if (arg == "--output")
       output = argv[++i];
+    else if (arg == "--method")
+      only.emplace_back(find_dof_method(argv[++i]).name);
     else
       return usage();
   }
+  if (std::find(only.begin(), only.end(), "auto") != only.end()) {
+    std::fputs("--method auto: auto is not measured (it runs the methods of the table)\n", stderr);
+    return 2;
+  }
+  if (!only.empty() && output.empty()) {
+    std::fputs("--method replaces rows of the table at --output: give --output\n", stderr);
+    return 2;
+  }
+  // With --method, the rows being replaced say how the table was measured.
+  std::string comments;
+  const std::vector<MethodTableRow> existing =
+      only.empty() ? std::vector<MethodTableRow>() : read_table(output, comments);
+  for (const MethodTableRow& row : existing) {
+    if (std::find(only.begin(), only.end(), row.method) == only.end()) continue;
+    if (size == 0) size = row.width;
+    if (threads == 0) threads = row.threads;
+    if (row.width != size || row.height != size || row.threads != threads)
+      std::fprintf(stderr, "note: the %s row of '%s' was measured at %td^2, %d threads; now %td^2, "
+                   "%d threads\n", row.method.c_str(), row.scene.c_str(), row.width, row.threads,
+                   size, threads);
+  }
+  if (size == 0) size = 1024;
+  if (threads == 0) threads = 2;
   if (size < 16 || threads < 1) return usage();
+  auto measured_here = [&](std::string_view name) {
+    return name != "auto" &&
+           (only.empty() || std::find(only.begin(), only.end(), name) != only.end());
+  };
 
   DofSettings settings;
   settings.threads = threads;
@@ -77,7 +140,7 @@ int main(int argc, char** argv) {
     DofReport report;
     find_dof_method("scatter").run(reference, scene.color, scene.coc.plane(0), settings, report);
     for (const DofMethod& method : dof_methods()) {
-      if (method.name == "auto") continue;
+      if (!measured_here(method.name)) continue;
       Image out;
       MethodTableRow row;
       row.method = std::string(method.name);
@@ -97,11 +160,17 @@ int main(int argc, char** argv) {
       rows.push_back(row);
     }
   }
+  std::string names;
+  for (const std::string& name : only) names += (names.empty() ? "" : ", ") + name;
+  const std::string measured_at =
+      "(" + std::to_string(size) + "^2, " + std::to_string(threads) + " threads)";
   const std::string csv =
-      "# The measured cost and error of every DOF method on the built-in scenes (auto.hpp).\n"
-      "# Regenerate: bash scripts/dof_method_table.sh (" +
-      std::to_string(size) + "^2, " + std::to_string(threads) + " threads)\n" +
-      format_method_table(rows);
+      only.empty()
+          ? "# The measured cost and error of every DOF method on the built-in scenes "
+            "(auto.hpp).\n# Regenerate: bash scripts/dof_method_table.sh " +
+                measured_at + "\n" + format_method_table(rows)
+          : comments + "# Re-measured alone: " + names + " " + measured_at + "\n" +
+                format_method_table(replace_rows(existing, rows));
   if (output.empty()) {
     std::fputs(csv.c_str(), stdout);
     return 0;
@@ -119,4 +188,15 @@ int main(int argc, char** argv) {
   }
   std::filesystem::rename(temporary, output);
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return measure(argc, argv);
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "tridiff_dof_method_table: %s\n", error.what());
+    return 2;
+  }
 }

@@ -5,8 +5,10 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <string>
 
 #include "tridiff/solvers/solve.hpp"
+#include "frame.hpp"
 #include "stage_clock.hpp"
 
 namespace tridiff::dof_detail {
@@ -43,21 +45,15 @@ inline float filled(bool known, float known_value, float sum, float weight) {
 }
 
 // A pixel of the near field: in front of the focus and blurred (negative CoC).
-inline bool in_near_field(float coc_px, float in_focus_px) { return coc_px <= -in_focus_px; }
+inline bool in_near_field(float coc_px, float in_focus_px) {
+  return FocusTest{in_focus_px}.is_near(coc_px);
+}
 
 bool has_near_blur(ConstPlane coc, float in_focus_px) {
   for (std::ptrdiff_t y = 0; y < coc.height(); ++y)
     for (std::ptrdiff_t x = 0; x < coc.width(); ++x)
       if (in_near_field(coc(x, y), in_focus_px)) return true;
   return false;
-}
-
-float max_abs(ConstPlane plane) {
-  float largest = 0;
-  for (std::ptrdiff_t y = 0; y < plane.height(); ++y)
-    for (std::ptrdiff_t x = 0; x < plane.width(); ++x)
-      largest = std::max(largest, std::abs(plane(x, y)));
-  return largest;
 }
 
 // Runs row(y) for every row, on `threads` threads.
@@ -70,11 +66,13 @@ void for_each_row(std::ptrdiff_t height, int threads, Row&& row) {
 // The layers are filled, blurred and composited in place in four buffers: a fresh full-frame
 // image costs its page faults (with the ten buffers of the first version, the layers of the
 // built-in scene at 1920 x 1080 on a 2-core VM took 268-584 ms, now typically 56).
-void layered_dof(Image& out, const Image& color, ConstPlane coc, const DofSettings& settings,
+void layered_dof(Image& out, const DofFrame& frame, const DofSettings& settings,
                  DofReport& report, const Diffuser& diffuse, const DiffusionOptions& options) {
+  const Image& color = frame.color();
+  const ConstPlane coc = frame.coc();
   const std::ptrdiff_t width = color.width(), height = color.height();
   const int channels = color.channels(), threads = settings.threads;
-  const float fill_beta = adi_beta_for_coc(max_abs(coc));
+  const float fill_beta = adi_beta_for_coc(frame.max_abs_coc());
   const float in_focus = settings.in_focus_coc_px;
   DiffusionReport diffusion;  // of the two blurs (the fills are always solved in full)
 
@@ -168,19 +166,21 @@ void layered_dof(Image& out, const Image& color, ConstPlane coc, const DofSettin
   report.skipped_fraction = diffusion.skipped_fraction();
 }
 
-// The diffusers name a conductance they refuse by their own argument: "value" (a per-pixel
-// conductance that is not finite), "beta" (a link field the explicit scheme cannot step). The
-// conductances come from the CoC, so the error is named as the CoC's, as every method names it.
-template <class Work>
-void naming_the_coc(const Image& color, ConstPlane coc, Work&& work) {
-  try {
-    work();
-  } catch (const InvalidArgument& error) {
-    if (error.argument() != "value" && error.argument() != "beta") throw;
-    validate_coc(color, coc);  // names a CoC pixel that is not finite
-    // A finite CoC whose conductance is not (|CoC| above about 1e19 px) or is too large.
-    throw InvalidArgument("coc", error.system(), error.row(), error.message());
-  }
+// Every pixel's conductance must be finite: a finite CoC above about 1.8e19 px has none. The
+// largest |CoC| decides (the conductance grows with it); the slow path names the first pixel.
+void require_finite_conductance(const DofFrame& frame, float in_focus_px) {
+  const CocConductance conductance{in_focus_px};
+  if (std::isfinite(conductance(frame.max_abs_coc()))) return;
+  const ConstPlane coc = frame.coc();
+  for (std::ptrdiff_t y = 0; y < coc.height(); ++y)
+    for (std::ptrdiff_t x = 0; x < coc.width(); ++x) {
+      const float k = conductance(coc(x, y));
+      if (!std::isfinite(k))
+        throw InvalidArgument("coc", -1, -1,
+                              "pixel (" + std::to_string(x) + ", " + std::to_string(y) +
+                                  "): " + std::to_string(coc(x, y)) + " maps to conductance " +
+                                  std::to_string(k) + "; it must be finite and >= 0");
+    }
 }
 
 }  // namespace
@@ -189,27 +189,20 @@ LinkField coc_links(ConstPlane coc, float in_focus_px, int threads) {
   return links_from_pixels(coc, CocConductance{in_focus_px}, threads);
 }
 
-void diffusion_dof(Image& out, const Image& color, ConstPlane coc, const DofSettings& settings,
+void diffusion_dof(Image& out, const DofFrame& frame, const DofSettings& settings,
                    DofReport& report, const Diffuser& diffuse) {
+  require_finite_conductance(frame, settings.in_focus_coc_px);
   DiffusionOptions options;
   options.threads = settings.threads;
   options.skip_inactive = settings.skip_in_focus;
   options.progress = settings.progress;
-  if (settings.layers && has_near_blur(coc, settings.in_focus_coc_px)) {
-    validate_dof_input(color, coc);
-    naming_the_coc(color, coc,
-                   [&] { layered_dof(out, color, coc, settings, report, diffuse, options); });
+  if (settings.layers && has_near_blur(frame.coc(), settings.in_focus_coc_px)) {
+    layered_dof(out, frame, settings, report, diffuse, options);
     return;
   }
-  // The colour is checked by the diffuser where it passes (see Diffuser), and so is the CoC:
-  // a CoC that is not finite has no finite conductance, which the diffuser refuses before it
-  // writes anything.
-  validate_coc_size(color, coc);
   DiffusionReport diffusion;
   timed(report, "diffusion", [&] {
-    naming_the_coc(color, coc, [&] {
-      diffusion = diffuse(out, color, coc, settings.in_focus_coc_px, options);
-    });
+    diffusion = diffuse(out, frame.color(), frame.coc(), settings.in_focus_coc_px, options);
   });
   report.skipped_fraction = diffusion.skipped_fraction();
 }

@@ -5,9 +5,8 @@
 
 namespace tridiff::dof_detail {
 
-void run_adi(Image& out, const Image& color, ConstPlane coc, const DofSettings& settings,
-             DofReport& report) {
-  diffusion_dof(out, color, coc, settings, report,
+void run_adi(Image& out, const DofFrame& frame, const DofSettings& settings, DofReport& report) {
+  diffusion_dof(out, frame, settings, report,
                 [](Image& dst, const Image& src, ConstPlane coc, float in_focus_px,
                    const DiffusionOptions& options) {
                   return diffuse_adi(dst, src, coc, CocConductance{in_focus_px}, options);

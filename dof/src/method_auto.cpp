@@ -9,6 +9,7 @@
 
 #include "tridiff/dof/auto.hpp"
 #include "tridiff/dof/tiles.hpp"
+#include "frame.hpp"
 #include "stage_clock.hpp"
 
 namespace tridiff {
@@ -167,6 +168,11 @@ MethodChoice choose_dof_method(ConstPlane coc, const DofSettings& settings,
                                std::span<const MethodTableRow> table) {
   const TileMap tiles(coc, sharp_below_px(settings.in_focus_coc_px), TileMap::kDefaultTile, 0,
                       settings.threads);
+  return choose_dof_method(tiles, settings, table);
+}
+
+MethodChoice choose_dof_method(const TileMap& tiles, const DofSettings& settings,
+                               std::span<const MethodTableRow> table) {
   std::vector<Candidate> candidates;
   std::string missing;
   for (const DofMethod& method : dof_methods()) {
@@ -209,13 +215,13 @@ MethodChoice choose_dof_method(ConstPlane coc, const DofSettings& settings,
 
 namespace dof_detail {
 
-void run_auto(Image& out, const Image& color, ConstPlane coc, const DofSettings& settings,
-              DofReport& report) {
-  validate_dof_input(color, coc);  // bad input is named before any choice is made
+// The frame is checked and classified once (DofFrame): the choice reads its tiles, and the
+// chosen method is run on the same frame.
+void run_auto(Image& out, const DofFrame& frame, const DofSettings& settings, DofReport& report) {
   const auto start = StageClock::now();
-  const MethodChoice choice = choose_dof_method(coc, settings, builtin_method_table());
+  const MethodChoice choice = choose_dof_method(frame.tiles(), settings, builtin_method_table());
   const double choose_seconds = seconds_since(start);
-  find_dof_method(choice.method).run(out, color, coc, settings, report);
+  run_on_frame(find_dof_method(choice.method), out, frame, settings, report);
   report.stages.insert(report.stages.begin(), DofStage{"choose", choose_seconds});
   report.chosen_method = choice.method;
   report.notes = choice.reason + (report.notes.empty() ? "" : "\n" + report.notes);

@@ -75,6 +75,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -84,9 +85,15 @@
 #include "tridiff/dof/tiles.hpp"
 #include "tridiff/solvers/solve.hpp"
 #include "stage_clock.hpp"
+#include "frame.hpp"
+#include "tiled_gather.hpp"
 
 namespace tridiff {
 namespace {
+
+using dof_detail::Span;
+using dof_detail::Stages;
+using dof_detail::TiledGather;
 
 constexpr std::ptrdiff_t kBlock = 4;  // downsampling factor per axis (seed 002 §28.4.3)
 constexpr float kMaxRadius = 256.f;   // px; larger radii are clamped (see the header)
@@ -219,10 +226,10 @@ void small_blur_span(const std::array<const float*, 5>& rows, std::ptrdiff_t wid
 }
 
 // Step 1: the block means of every channel and (near_out non-empty) the block's largest near
-// radius, clamped to max_radius; a pixel is near when c <= -point_below. The blocks of the last
+// radius, clamped to max_radius; a pixel is near by focus.is_near. The blocks of the last
 // row and column reach past the frame into its mirror image, so every block holds 16 pixels
 // centred on 4j + 1.5 as the upsampling assumes.
-void downsample(const Image& color, ConstPlane coc, float point_below, float max_radius,
+void downsample(const Image& color, ConstPlane coc, FocusTest focus, float max_radius,
                 Image& mean, Plane near_out, int threads) {
   const std::ptrdiff_t width = color.width(), height = color.height();
   const std::ptrdiff_t qw = mean.width(), qh = mean.height();
@@ -249,200 +256,222 @@ void downsample(const Image& color, ConstPlane coc, float point_below, float max
       for (const std::ptrdiff_t y : rows)
         for (std::ptrdiff_t k = 0; k < kBlock; ++k) {
           const float c = coc(cols[k], y);
-          if (c <= -point_below) largest = std::max(largest, -0.5f * c);
+          if (focus.is_near(c)) largest = std::max(largest, -0.5f * c);
         }
       near_out(i, j) = std::min(largest, max_radius);
     }
   }
 }
 
+// What the frame asks of the method: the level nodes, the Gaussian of the large level and the
+// near CoC, and the tiles to blend (with the near spread's margin).
+struct Plan {
+  float top = 0;  // the seed's max blur radius R
+  Nodes nodes;
+  double sigma_q = 0;
+  std::vector<float> gaussian;
+  bool near = false;
+  std::optional<TileMap> spread_tiles;  // with a margin; else the frame's tiles
+};
+
+Plan plan_frame(const DofFrame& frame) {
+  Plan plan;
+  plan.top = std::min(frame.max_radius(), kMaxRadius);
+  plan.near = frame.has_near();
+  plan.nodes.radius = {0.f, float(disc_radius(kSmallVariance)),
+                       float(disc_radius(kMediumVariance)), plan.top};
+  plan.nodes.count = plan.top > plan.nodes.radius[2] ? 4 : plan.top > plan.nodes.radius[1] ? 3 : 2;
+  plan.sigma_q = large_sigma(plan.top);
+  plan.gaussian = gaussian_kernel(plan.sigma_q);
+  const std::ptrdiff_t gaussian_reach = std::ptrdiff_t(plan.gaussian.size() / 2);
+  // The near CoC of a pixel spreads to quarter pixels within the Gaussian's reach plus one (the
+  // 3 x 3 blur), and a quarter pixel j is read by native pixels 4j - 2 ... 4j + 5: at most
+  // 4 (reach + 1) + 5 native pixels from the near pixel (Chebyshev). Far pixels change only
+  // themselves. The TileMap adds the margin to every disc (conservative for the far ones).
+  const std::ptrdiff_t margin = plan.near ? kBlock * (gaussian_reach + 1) + 5 : 0;
+  if (margin > 0)
+    plan.spread_tiles.emplace(frame.coc(), frame.sharp_below(), TileMap::kDefaultTile, margin,
+                              frame.threads());
+  return plan;
+}
+
+// Steps 1-4 on the quarter grid: the medium and large levels and the spread near CoC D.
+struct QuarterGrid {
+  std::ptrdiff_t width = 0, height = 0;
+  Image medium, large;
+  Image spread;  // D after the 3 x 3 blur (near pixels only)
+};
+
+QuarterGrid quarter_grid(const DofFrame& frame, const Plan& plan, Stages& stages) {
+  const Image& color = frame.color();
+  const int team = frame.threads(), channels = color.channels();
+  QuarterGrid grid;
+  const std::ptrdiff_t qw = (color.width() + kBlock - 1) / kBlock,
+                       qh = (color.height() + kBlock - 1) / kBlock;
+  grid.width = qw;
+  grid.height = qh;
+  Image mean(qw, qh, channels), near_coc;
+  if (plan.near) near_coc.reset(qw, qh, 1);
+  downsample(color, frame.coc(), frame.focus(), plan.top, mean,
+             plan.near ? near_coc.plane(0) : Plane(), team);
+  stages.end("downsample");
+
+  const std::array<float, 3> tent{0.25f, 0.5f, 0.25f};  // [1 2 1] / 4 per axis: listing 28-3
+  const std::vector<float>& gaussian = plan.gaussian;
+  if (plan.nodes.count >= 3) {
+    grid.medium.reset(qw, qh, channels);
+    for (int c = 0; c < channels; ++c)
+      convolve_separable(grid.medium.plane(c), mean.plane(c), tent, tent, Border::mirror, team);
+  }
+  if (plan.nodes.count == 4) {
+    grid.large.reset(qw, qh, channels);
+    for (int c = 0; c < channels; ++c)
+      convolve_separable(grid.large.plane(c), mean.plane(c), gaussian, gaussian, Border::mirror, team);
+  }
+  stages.end("medium and large levels");
+
+  if (!plan.near) return grid;
+  Image blurred(qw, qh, 1), combined(qw, qh, 1);
+  convolve_separable(blurred.plane(0), near_coc.plane(0), gaussian, gaussian, Border::mirror, team);
+  for (std::ptrdiff_t j = 0; j < qh; ++j)
+    for (std::ptrdiff_t i = 0; i < qw; ++i) {
+      const float d0 = near_coc(i, j, 0), db = blurred(i, j, 0);
+      combined(i, j, 0) = 2.f * std::max(d0, db) - d0;  // seed 002 §28.4.3
+    }
+  grid.spread.reset(qw, qh, 1);
+  convolve_separable(grid.spread.plane(0), combined.plane(0), tent, tent, Border::mirror, team);
+  stages.end("near coc");
+  return grid;
+}
+
+// One thread's buffers for the blend: per column the weights of the unblurred pixel and the
+// small, medium and large levels (all 0 for a pixel left as it is), and the levels along the
+// row.
+struct RowScratch {
+  std::array<std::vector<float>, 4> weight, level;
+  std::vector<char> blurred;
+  std::vector<float> quarter_row;
+
+  RowScratch(std::ptrdiff_t width, std::ptrdiff_t quarter_width) {
+    for (std::size_t k = 0; k < 4; ++k) {
+      weight[k].assign(std::size_t(width), 0.f);
+      level[k].assign(std::size_t(width), 0.f);
+    }
+    blurred.resize(std::size_t(width));
+    quarter_row.resize(std::size_t(quarter_width));
+  }
+};
+
+// Step 5 on the computed spans of row y: first every pixel's weights, then per channel the
+// levels along the row and their weighted sum.
+void blend_row(Image& out, const DofFrame& frame, const Plan& plan, const QuarterGrid& grid,
+               const Taps& tx, const Taps& ty, std::ptrdiff_t y, const std::vector<Span>& spans,
+               RowScratch& scratch) {
+  const Image& color = frame.color();
+  const std::ptrdiff_t width = color.width(), height = color.height();
+  const FocusTest focus = frame.focus();
+  const bool near = plan.near;
+  auto& [weight, level, blurred, quarter_row] = scratch;
+  float* near_row = level[0].data();  // free until the channels' pass
+  if (near) {
+    lerp_rows(grid.spread.plane(0), ty, y, quarter_row.data());
+    for (const auto& [x0, x1] : spans) upsample_span(quarter_row.data(), tx, x0, x1, near_row);
+  }
+  const float* coc_row = frame.coc().row(y);
+  std::array<bool, 4> used{};  // whether some pixel of the row takes the level
+  for (const auto& [x0, x1] : spans)
+    for (std::ptrdiff_t x = x0; x < x1; ++x) {
+      const auto i = std::size_t(x);
+      const float c = coc_row[x];
+      const float far = focus.is_far(c) ? 0.5f * c : 0.f;
+      // Radii above the top node would extrapolate; clamp there (the top node is R when used).
+      const float r = std::min(std::max(far, near ? near_row[i] : 0.f), plan.top);
+      blurred[i] = r > 0;
+      const std::array<float, 4> w =
+          r > 0 ? blend_weights(plan.nodes, r) : std::array<float, 4>{1.f, 0.f, 0.f, 0.f};
+      for (std::size_t k = 0; k < 4; ++k) {
+        weight[k][i] = w[k];
+        used[k] = used[k] || w[k] > 0;
+      }
+    }
+  std::array<const float*, 5> rows;
+  for (int ch = 0; ch < color.channels(); ++ch) {
+    const ConstPlane in = color.plane(ch);
+    for (std::ptrdiff_t k = 0; k < 5; ++k)
+      rows[std::size_t(k)] = in.row(border_index(y + k - 2, height, Border::mirror));
+    if (used[1])
+      for (const auto& [x0, x1] : spans) small_blur_span(rows, width, x0, x1, level[1].data());
+    for (std::size_t k = 2; k < 4; ++k) {
+      if (!used[k]) continue;
+      lerp_rows((k == 2 ? grid.medium : grid.large).plane(ch), ty, y, quarter_row.data());
+      for (const auto& [x0, x1] : spans)
+        upsample_span(quarter_row.data(), tx, x0, x1, level[k].data());
+    }
+    const float* in_row = rows[2];
+    float* out_row = out.plane(ch).row(y);
+    const float *w0 = weight[0].data(), *w1 = weight[1].data(), *w2 = weight[2].data(),
+                *w3 = weight[3].data();
+    const float *small = level[1].data(), *med = level[2].data(), *big = level[3].data();
+    const char* moved = blurred.data();
+    // A level no pixel of the row takes is left out; one that some pixel takes is finite
+    // (below ~1e37) and weighs 0 elsewhere.
+    for (const auto& [x0, x1] : spans)
+      for (std::ptrdiff_t x = x0; x < x1; ++x) {
+        float v = w0[x] * in_row[x];
+        if (used[1]) v += w1[x] * small[x];
+        if (used[2]) v += w2[x] * med[x];
+        if (used[3]) v += w3[x] * big[x];
+        out_row[x] = moved[x] ? v : in_row[x];  // r = 0: the input, bit for bit
+      }
+  }
+}
+
+std::string describe(const Plan& plan) {
+  char line[200];
+  std::snprintf(line, sizeof line,
+                "levels at radius %.2f / %.2f / %.2f px (small / medium / large%s), Gaussian "
+                "sigma %.2f quarter px; radii above %.2f px clamped; near CoC %s",
+                double(plan.nodes.radius[1]), double(plan.nodes.radius[2]), double(plan.top),
+                plan.nodes.count == 4 ? "" : ": unused", plan.sigma_q, double(plan.top),
+                plan.near ? "spread" : "absent: near passes left out");
+  return line;
+}
+
 }  // namespace
 
 namespace dof_detail {
 
-void run_gems(Image& out, const Image& color, ConstPlane coc, const DofSettings& settings,
-              DofReport& report) {
-  validate_dof_input(color, coc);
-  const int team = detail::resolve_threads(settings.threads);
-  const std::ptrdiff_t width = color.width(), height = color.height();
-  const int channels = color.channels();
-  const float point_below = sharp_below_px(settings.in_focus_coc_px);
-  using Clock = StageClock;
-
-  auto start = Clock::now();
-  out.reset(width, height, channels);
-  const TileMap frame(coc, point_below, TileMap::kDefaultTile, 0, team);
-  const float top = std::min(frame.max_radius(), kMaxRadius);  // the seed's max blur radius R
-  if (top <= 0) {  // every pixel sharp: the input, bit for bit
-    for (int c = 0; c < channels; ++c) copy_plane(out.plane(c), color.plane(c));
-    report.stages.push_back({"classify", seconds_since(start)});
+void run_gems(Image& out, const DofFrame& frame, const DofSettings& settings, DofReport& report) {
+  const Image& color = frame.color();
+  Stages stages(report);
+  out.reset(color.width(), color.height(), color.channels());
+  if (!(frame.max_radius() > 0)) {  // every pixel sharp: the input, bit for bit
+    for (int c = 0; c < color.channels(); ++c) copy_plane(out.plane(c), color.plane(c));
+    stages.end("classify");
     report.skipped_fraction = settings.skip_in_focus ? 1.0 : 0.0;
     report.notes = "every pixel in focus";
     if (settings.progress) settings.progress(1.0);
     return;
   }
-  const bool near = frame.has_near();
-  Nodes nodes;
-  nodes.radius = {0.f, float(disc_radius(kSmallVariance)), float(disc_radius(kMediumVariance)),
-                  top};
-  nodes.count = top > nodes.radius[2] ? 4 : top > nodes.radius[1] ? 3 : 2;
-  // Radii above the top node would extrapolate; clamp there (the top node is R when used).
-  const float clamp_radius = top;
-  const double sigma_q = large_sigma(top);
-  const std::vector<float> gaussian = gaussian_kernel(sigma_q);
-  const std::ptrdiff_t gaussian_reach = std::ptrdiff_t(gaussian.size() / 2);
+  const Plan plan = plan_frame(frame);
+  const TiledGather gather(plan.spread_tiles ? *plan.spread_tiles : frame.tiles(),
+                           settings.skip_in_focus, frame.threads());
+  stages.end("classify");
 
-  // The near CoC of a pixel spreads to quarter pixels within the Gaussian's reach plus one (the
-  // 3 x 3 blur), and a quarter pixel j is read by native pixels 4j - 2 ... 4j + 5: at most
-  // 4 (reach + 1) + 5 native pixels from the near pixel (Chebyshev). Far pixels change only
-  // themselves. The TileMap adds the margin to every disc (conservative for the far ones).
-  const std::ptrdiff_t margin = near ? kBlock * (gaussian_reach + 1) + 5 : 0;
-  const TileMap tiles =
-      margin > 0 ? TileMap(coc, point_below, TileMap::kDefaultTile, margin, team) : frame;
-  report.stages.push_back({"classify", seconds_since(start)});
+  const QuarterGrid grid = quarter_grid(frame, plan, stages);
 
-  // Steps 1-4 on the quarter grid.
-  start = Clock::now();
-  const std::ptrdiff_t qw = (width + kBlock - 1) / kBlock, qh = (height + kBlock - 1) / kBlock;
-  Image mean(qw, qh, channels), near_coc;
-  if (near) near_coc.reset(qw, qh, 1);
-  downsample(color, coc, point_below, top, mean, near ? near_coc.plane(0) : Plane(), team);
-  report.stages.push_back({"downsample", seconds_since(start)});
+  const Taps tx = upsample_taps(color.width(), grid.width),
+             ty = upsample_taps(color.height(), grid.height);
+  gather.for_each_row([&] { return RowScratch(color.width(), grid.width); },
+                      [&](std::ptrdiff_t y, const std::vector<Span>& spans, RowScratch& scratch) {
+                        blend_row(out, frame, plan, grid, tx, ty, y, spans, scratch);
+                      });
+  gather.copy_the_rest(out, color);
+  stages.end("blend");
 
-  start = Clock::now();
-  const std::array<float, 3> tent{0.25f, 0.5f, 0.25f};  // [1 2 1] / 4 per axis: listing 28-3
-  Image medium, large;
-  if (nodes.count >= 3) {
-    medium.reset(qw, qh, channels);
-    for (int c = 0; c < channels; ++c)
-      convolve_separable(medium.plane(c), mean.plane(c), tent, tent, Border::mirror, team);
-  }
-  if (nodes.count == 4) {
-    large.reset(qw, qh, channels);
-    for (int c = 0; c < channels; ++c)
-      convolve_separable(large.plane(c), mean.plane(c), gaussian, gaussian, Border::mirror,
-                         team);
-  }
-  report.stages.push_back({"medium and large levels", seconds_since(start)});
-
-  Image spread;  // D after the 3 x 3 blur
-  if (near) {
-    start = Clock::now();
-    Image blurred(qw, qh, 1), combined(qw, qh, 1);
-    convolve_separable(blurred.plane(0), near_coc.plane(0), gaussian, gaussian,
-                       Border::mirror, team);
-    for (std::ptrdiff_t j = 0; j < qh; ++j)
-      for (std::ptrdiff_t i = 0; i < qw; ++i) {
-        const float d0 = near_coc(i, j, 0), db = blurred(i, j, 0);
-        combined(i, j, 0) = 2.f * std::max(d0, db) - d0;  // seed 002 §28.4.3
-      }
-    spread.reset(qw, qh, 1);
-    convolve_separable(spread.plane(0), combined.plane(0), tent, tent, Border::mirror, team);
-    report.stages.push_back({"near coc", seconds_since(start)});
-  }
-
-  // Step 5: the blend, row by row on the tiles that need it: first every pixel's weights, then
-  // per channel the levels along the row and their weighted sum.
-  start = Clock::now();
-  const Taps tx = upsample_taps(width, qw), ty = upsample_taps(height, qh);
-  const bool skip = settings.skip_in_focus;
-  const std::ptrdiff_t tile = tiles.tile_size();
-#pragma omp parallel num_threads(team)
-  {
-    const auto row_size = static_cast<std::size_t>(width);
-    const auto quarter_size = static_cast<std::size_t>(qw);
-    // Per column: the weights of the unblurred pixel and the small, medium and large levels
-    // (all 0 for a pixel left as it is), and the levels along the row.
-    std::array<std::vector<float>, 4> weight;
-    std::array<std::vector<float>, 4> level;
-    for (std::size_t k = 0; k < 4; ++k) {
-      weight[k].assign(row_size, 0.f);
-      level[k].assign(row_size, 0.f);
-    }
-    std::vector<char> blurred(row_size);
-    std::vector<float> quarter_row(quarter_size);
-    std::vector<std::pair<std::ptrdiff_t, std::ptrdiff_t>> spans;
-#pragma omp for schedule(static)
-    for (std::ptrdiff_t y = 0; y < height; ++y) {
-      // The columns to compute: the tiles that need work (every column without skipping).
-      spans.clear();
-      for (std::ptrdiff_t t = 0; t < tiles.tiles_x(); ++t) {
-        if (skip && !tiles.needs_work(t, y / tile)) continue;  // copy_unreached_tiles below
-        const std::ptrdiff_t x0 = t * tile, x1 = std::min(x0 + tile, width);
-        if (!spans.empty() && spans.back().second == x0)
-          spans.back().second = x1;
-        else
-          spans.emplace_back(x0, x1);
-      }
-      if (spans.empty()) continue;
-      float* near_row = level[0].data();  // free until the channels' pass
-      if (near) {
-        lerp_rows(spread.plane(0), ty, y, quarter_row.data());
-        for (const auto& [x0, x1] : spans) upsample_span(quarter_row.data(), tx, x0, x1, near_row);
-      }
-      const float* coc_row = coc.row(y);
-      std::array<bool, 4> used{};  // whether some pixel of the row takes the level
-      for (const auto& [x0, x1] : spans)
-        for (std::ptrdiff_t x = x0; x < x1; ++x) {
-          const auto i = std::size_t(x);
-          const float c = coc_row[x];
-          const float far = c >= point_below ? 0.5f * c : 0.f;
-          const float r = std::min(std::max(far, near ? near_row[i] : 0.f), clamp_radius);
-          blurred[i] = r > 0;
-          const std::array<float, 4> w =
-              r > 0 ? blend_weights(nodes, r) : std::array<float, 4>{1.f, 0.f, 0.f, 0.f};
-          for (std::size_t k = 0; k < 4; ++k) {
-            weight[k][i] = w[k];
-            used[k] = used[k] || w[k] > 0;
-          }
-        }
-      std::array<const float*, 5> rows;
-      for (int ch = 0; ch < channels; ++ch) {
-        const ConstPlane in = color.plane(ch);
-        for (std::ptrdiff_t k = 0; k < 5; ++k)
-          rows[std::size_t(k)] = in.row(border_index(y + k - 2, height, Border::mirror));
-        if (used[1])
-          for (const auto& [x0, x1] : spans) small_blur_span(rows, width, x0, x1, level[1].data());
-        for (std::size_t k = 2; k < 4; ++k) {
-          if (!used[k]) continue;
-          lerp_rows((k == 2 ? medium : large).plane(ch), ty, y, quarter_row.data());
-          for (const auto& [x0, x1] : spans)
-            upsample_span(quarter_row.data(), tx, x0, x1, level[k].data());
-        }
-        const float* in_row = rows[2];
-        float* out_row = out.plane(ch).row(y);
-        const float *w0 = weight[0].data(), *w1 = weight[1].data(), *w2 = weight[2].data(),
-                    *w3 = weight[3].data();
-        const float *small = level[1].data(), *med = level[2].data(), *big = level[3].data();
-        const char* moved = blurred.data();
-        // A level no pixel of the row takes is left out; one that some pixel takes is finite
-        // (below ~1e37) and weighs 0 elsewhere.
-        for (const auto& [x0, x1] : spans)
-          for (std::ptrdiff_t x = x0; x < x1; ++x) {
-            float v = w0[x] * in_row[x];
-            if (used[1]) v += w1[x] * small[x];
-            if (used[2]) v += w2[x] * med[x];
-            if (used[3]) v += w3[x] * big[x];
-            out_row[x] = moved[x] ? v : in_row[x];  // r = 0: the input, bit for bit
-          }
-      }
-    }
-  }
-  if (skip)
-    for (int ch = 0; ch < channels; ++ch)
-      copy_unreached_tiles(out.plane(ch), color.plane(ch), tiles, team);
-  report.stages.push_back({"blend", seconds_since(start)});
-
-  report.skipped_fraction = skip ? 1.0 - tiles.work_fraction() : 0.0;
+  report.skipped_fraction = gather.skipped_fraction();
   report.layered = false;
-  char line[200];
-  std::snprintf(line, sizeof line,
-                "levels at radius %.2f / %.2f / %.2f px (small / medium / large%s), Gaussian "
-                "sigma %.2f quarter px; radii above %.2f px clamped; near CoC %s",
-                double(nodes.radius[1]), double(nodes.radius[2]), double(top),
-                nodes.count == 4 ? "" : ": unused", sigma_q, double(clamp_radius),
-                near ? "spread" : "absent: near passes left out");
-  report.notes = line;
+  report.notes = describe(plan);
   if (settings.progress) settings.progress(1.0);
 }
 

@@ -10,6 +10,7 @@
 #include "tridiff/dof/method.hpp"
 #include "tridiff/solvers/solve.hpp"
 #include "stage_clock.hpp"
+#include "frame.hpp"
 
 namespace tridiff {
 namespace ipf {
@@ -216,9 +217,9 @@ namespace dof_detail {
 
 // The registry's interface carries no depth map; the signed CoC rises monotonically with
 // distance (thin lens and artist curve alike), so it orders pixels as fig. 11's Z-Value does.
-void run_ipf(Image& out, const Image& color, ConstPlane coc, const DofSettings& settings,
-             DofReport& report) {
-  validate_dof_input(color, coc);
+void run_ipf(Image& out, const DofFrame& frame, const DofSettings& settings, DofReport& report) {
+  const Image& color = frame.color();
+  const ConstPlane coc = frame.coc();
   ipf::DofProgram program;
   program.in_focus_coc_px = settings.in_focus_coc_px;
   const auto start = StageClock::now();

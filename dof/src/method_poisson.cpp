@@ -80,7 +80,8 @@
 #include "tridiff/dof/method.hpp"
 #include "tridiff/dof/tiles.hpp"
 #include "tridiff/solvers/solve.hpp"
-#include "stage_clock.hpp"
+#include "frame.hpp"
+#include "tiled_gather.hpp"
 
 namespace tridiff {
 namespace {
@@ -228,7 +229,7 @@ struct Level {
   float variance = 0;  // per axis, of the blur and the bilinear read together
 };
 
-Level build_level(const Image& color, ConstPlane coc, float point_below, double sigma,
+Level build_level(const Image& color, ConstPlane coc, FocusTest focus, double sigma,
                   int threads) {
   const std::ptrdiff_t width = color.width(), height = color.height();
   Level level;
@@ -251,7 +252,7 @@ Level build_level(const Image& color, ConstPlane coc, float point_below, double 
                        rows = (2 * height - 1) / (2 * spacing) + 3;
   level.samples.reset(cols, rows, color.channels());
   auto mask_of = [&](std::ptrdiff_t x, std::ptrdiff_t y) {
-    return std::fabs(coc(fold_index(x, width), fold_index(y, height))) >= point_below
+    return !focus.is_sharp(coc(fold_index(x, width), fold_index(y, height)))
                ? 1.f
                : kSharpMask;
   };
@@ -374,11 +375,11 @@ inline float read(const float* plane, std::ptrdiff_t pitch, const Bilinear& b) {
 // The gather of one pixel (x, y) of signed CoC c into out (every channel). A sharp pixel keeps
 // its value. This is the whole per-pixel mathematics; the driver below only traverses.
 void gather_pixel(Image& out, const Image& color, ConstPlane coc, std::ptrdiff_t x,
-                  std::ptrdiff_t y, float point_below, const std::vector<Level>& levels) {
+                  std::ptrdiff_t y, FocusTest focus, const std::vector<Level>& levels) {
   const std::ptrdiff_t width = color.width(), height = color.height();
   const float c = coc(x, y);
   const int channels = color.channels();
-  if (!(std::fabs(c) >= point_below)) {
+  if (focus.is_sharp(c)) {
     for (int ch = 0; ch < channels; ++ch) out(x, y, ch) = color(x, y, ch);
     return;
   }
@@ -400,7 +401,7 @@ void gather_pixel(Image& out, const Image& color, ConstPlane coc, std::ptrdiff_t
     float w = 0;
     if (i == 0) {
       w = 1;  // the pixel itself
-    } else if (neighbour >= point_below) {
+    } else if (!focus.is_sharp(neighbour)) {
       const float r = std::min(0.5f * neighbour, kMaxRadius);
       const float area = r > radius ? (radius / r) * (radius / r) : 1.f;
       w = std::clamp(r + 1 - radius * pattern.radius[i], 0.f, 1.f) * area;
@@ -431,79 +432,73 @@ void gather_pixel(Image& out, const Image& color, ConstPlane coc, std::ptrdiff_t
   }
 }
 
+// The levels the frame's largest disc needs: V <= max(1/6, var(R) a / (m2 + a)) for every
+// pixel (plan_pixel), so the chain stops at the first level of at least that variance. None
+// when no pixel is out of focus.
+std::vector<Level> build_levels(const DofFrame& frame) {
+  std::vector<Level> levels;
+  const float max_radius = std::min(frame.max_radius(), kMaxRadius);
+  if (!(max_radius > 0)) return levels;
+  const Image& color = frame.color();
+  const ConstPlane coc = frame.coc();
+  const FocusTest focus = frame.focus();
+  const int team = frame.threads();
+  const TapPattern& pattern = tap_pattern();
+  const float ratio =
+      *std::max_element(pattern.alias_ratio.begin() + kMinQuads, pattern.alias_ratio.end());
+  const float needed = std::max(kBilinearVariance, scatter_disc_variance()(max_radius) * ratio);
+  const double cap = std::min(kMaxLevelSigma, 2.0 * double(std::max(color.width(), color.height())));
+  levels.push_back(build_level(color, coc, focus, 0, team));
+  for (double sigma = 1; levels.back().variance < needed && sigma <= cap; sigma *= 2)
+    levels.push_back(build_level(color, coc, focus, sigma, team));
+  return levels;
+}
+
+std::string describe_levels(const std::vector<Level>& levels) {
+  std::string sigmas;
+  for (std::size_t l = 1; l < levels.size(); ++l)
+    sigmas += (l > 1 ? ", " : "") + std::to_string(std::sqrt(levels[l].variance)).substr(0, 5);
+  return std::to_string(levels.size()) + " levels (read sigma 0.41" +
+         (sigmas.empty() ? "" : ", " + sigmas) +
+         " px), 13-49 taps; the near field is not blurred over its background";
+}
+
 }  // namespace
 
 namespace dof_detail {
 
-void run_poisson(Image& out, const Image& color, ConstPlane coc, const DofSettings& settings,
+void run_poisson(Image& out, const DofFrame& frame, const DofSettings& settings,
                  DofReport& report) {
-  validate_dof_input(color, coc);
-  const int team = detail::resolve_threads(settings.threads);
-  const std::ptrdiff_t width = color.width(), height = color.height();
-  const int channels = color.channels();
-  const float point_below = sharp_below_px(settings.in_focus_coc_px);
-  using Clock = StageClock;
+  const Image& color = frame.color();
+  Stages stages(report);
+  const TiledGather gather(frame.tiles(), settings.skip_in_focus, frame.threads());
+  out.reset(frame.width(), frame.height(), frame.channels());
+  stages.end("tiles");
 
-  auto start = Clock::now();
-  const TileMap tiles(coc, point_below, TileMap::kDefaultTile, 0, team);
-  out.reset(width, height, channels);
-  report.stages.push_back({"tiles", seconds_since(start)});
+  const std::vector<Level> levels = build_levels(frame);
+  stages.end("levels");
 
-  // The levels the frame's largest disc needs: V <= max(1/6, var(R) a / (m2 + a)) for every
-  // pixel (plan_pixel), so the chain stops at the first level of at least that variance.
-  start = Clock::now();
-  std::vector<Level> levels;
-  const float max_radius = std::min(tiles.max_radius(), kMaxRadius);
-  if (max_radius > 0) {
-    const TapPattern& pattern = tap_pattern();
-    const float ratio =
-        *std::max_element(pattern.alias_ratio.begin() + kMinQuads, pattern.alias_ratio.end());
-    const float needed = std::max(kBilinearVariance, scatter_disc_variance()(max_radius) * ratio);
-    const double cap = std::min(kMaxLevelSigma, 2.0 * double(std::max(width, height)));
-    levels.push_back(build_level(color, coc, point_below, 0, team));
-    for (double sigma = 1; levels.back().variance < needed && sigma <= cap; sigma *= 2)
-      levels.push_back(build_level(color, coc, point_below, sigma, team));
-  }
-  report.stages.push_back({"levels", seconds_since(start)});
-
-  // The gather, tile by tile; tiles without a disc of their own are copies.
-  start = Clock::now();
-  const bool skip = settings.skip_in_focus;
-  const std::ptrdiff_t tile_count = tiles.tiles_x() * tiles.tiles_y();
-  std::ptrdiff_t copied = 0;
-#pragma omp parallel for num_threads(team) schedule(dynamic, 1) reduction(+ : copied)
-  for (std::ptrdiff_t t = 0; t < tile_count; ++t) {
-    const std::ptrdiff_t tx = t % tiles.tiles_x(), ty = t / tiles.tiles_x();
-    const Rect area = tiles.rect(tx, ty);
-    if (skip && !tiles.needs_work(tx, ty)) {
-      copied += area.area();  // copy_unreached_tiles below
-      continue;
-    }
-    if (levels.empty() || (skip && tiles.at(tx, ty).max_radius == 0)) {
-      for (int ch = 0; ch < channels; ++ch)
+  // A pixel's gather radius is its own: a tile without a disc of its own is a copy.
+  const std::ptrdiff_t copied =
+      gather.for_each_tile([&](const Rect& area, const TileInfo& tile) -> std::ptrdiff_t {
+        if (levels.empty() || (gather.skip() && tile.max_radius == 0)) {
+          for (int ch = 0; ch < color.channels(); ++ch)
+            for (std::ptrdiff_t y = area.y; y < area.y + area.height; ++y)
+              std::copy_n(color.plane(ch).row(y) + area.x, area.width,
+                          out.plane(ch).row(y) + area.x);
+          return gather.skip() ? area.area() : 0;
+        }
         for (std::ptrdiff_t y = area.y; y < area.y + area.height; ++y)
-          std::copy_n(color.plane(ch).row(y) + area.x, area.width,
-                      out.plane(ch).row(y) + area.x);
-      if (skip) copied += area.area();
-      continue;
-    }
-    for (std::ptrdiff_t y = area.y; y < area.y + area.height; ++y)
-      for (std::ptrdiff_t x = area.x; x < area.x + area.width; ++x)
-        gather_pixel(out, color, coc, x, y, point_below, levels);
-  }
-  if (skip)
-    for (int ch = 0; ch < channels; ++ch)
-      copy_unreached_tiles(out.plane(ch), color.plane(ch), tiles, team);
-  report.stages.push_back({"gather", seconds_since(start)});
+          for (std::ptrdiff_t x = area.x; x < area.x + area.width; ++x)
+            gather_pixel(out, color, frame.coc(), x, y, frame.focus(), levels);
+        return 0;
+      });
+  gather.copy_the_rest(out, color);
+  stages.end("gather");
 
-  report.skipped_fraction = double(copied) / double(width * height);
+  report.skipped_fraction = double(copied) / double(frame.width() * frame.height());
   report.layered = false;
-  std::string sigmas;
-  for (std::size_t l = 1; l < levels.size(); ++l)
-    sigmas += (l > 1 ? ", " : "") + std::to_string(std::sqrt(levels[l].variance)).substr(0, 5);
-  report.notes = std::to_string(levels.size()) + " levels (read sigma 0.41" +
-                 (sigmas.empty() ? "" : ", " + sigmas) +
-                 " px), 13-49 taps; the near field is not blurred over its background";
+  report.notes = describe_levels(levels);
   if (settings.progress) settings.progress(1.0);
 }
 

@@ -73,6 +73,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -81,9 +82,15 @@
 #include "tridiff/dof/tiles.hpp"
 #include "tridiff/solvers/solve.hpp"
 #include "stage_clock.hpp"
+#include "frame.hpp"
+#include "tiled_gather.hpp"
 
 namespace tridiff {
 namespace {
+
+using dof_detail::Span;
+using dof_detail::Stages;
+using dof_detail::TiledGather;
 
 constexpr PyramidFilter kFilter = PyramidFilter::quasi;
 // Neighbouring layers differ by this factor in diameter. Against the scatter reference on
@@ -151,52 +158,47 @@ void blur_layer_plane(ConstPlane in, Plane out, double sigma, int threads) {
     pyramid_blur(out, in, kFilter, 0, sigma, Border::replicate, threads);
 }
 
-}  // namespace
+// What the frame asks of the method: the tiles, every pixel's side and split, and the layers
+// in use, front to back.
+struct LayerPlan {
+  std::optional<TileMap> tiles;
+  bool nothing_blurred = false;  // skipping and no tile needs work
+  std::vector<std::int8_t> side_of;
+  std::vector<Split> split_of;
+  std::vector<Layer> layers;
+  int near_layers = 0, far_layers = 0;
+};
 
-namespace dof_detail {
-
-void run_pyramid_layers(Image& out, const Image& color, ConstPlane coc,
-                        const DofSettings& settings, DofReport& report) {
-  validate_dof_input(color, coc);
-  const int team = detail::resolve_threads(settings.threads);
-  const std::ptrdiff_t width = color.width(), height = color.height();
-  const int channels = color.channels();
-  const float sharp_below = sharp_below_px(settings.in_focus_coc_px);
-  const bool skip = settings.skip_in_focus;
-  using Clock = StageClock;
-
-  // 1. Tiles, the layers of each side from the CoC range present, every pixel's split.
-  auto start = Clock::now();
+LayerPlan plan_layers(const DofFrame& frame, bool skip) {
+  const ConstPlane coc = frame.coc();
+  const std::ptrdiff_t width = frame.width(), height = frame.height();
+  const int team = frame.threads();
+  const FocusTest focus = frame.focus();
+  LayerPlan plan;
   double near_max = 0, far_max = 0;  // the largest out-of-focus |c| on each side
 #pragma omp parallel for num_threads(team) schedule(static) reduction(max : near_max, far_max)
   for (std::ptrdiff_t y = 0; y < height; ++y)
     for (std::ptrdiff_t x = 0; x < width; ++x) {
       const float c = coc(x, y);
-      if (c <= -sharp_below) near_max = std::max(near_max, -double(c));
-      if (c >= sharp_below) far_max = std::max(far_max, double(c));
+      if (focus.is_near(c)) near_max = std::max(near_max, -double(c));
+      if (focus.is_far(c)) far_max = std::max(far_max, double(c));
     }
   near_max = std::min(near_max, kMaxDiameter);
   far_max = std::min(far_max, kMaxDiameter);
   const double max_radius = std::max(near_max, far_max) / 2;
   const std::ptrdiff_t margin =
       static_cast<std::ptrdiff_t>(std::ceil(kReachPerRadius * max_radius)) + kReachPx;
-  const TileMap tiles(coc, sharp_below, kTile, margin, team);
-  if (skip && tiles.work_fraction() == 0) {
-    // Nothing out of focus: the sharp layer alone, which is the input (what the full path gives
-    // bit for bit: weight 1, transmittance 1, no normalisation).
-    out = color;
-    report.stages.push_back({"copy", seconds_since(start)});
-    report.skipped_fraction = 1;
-    report.notes = "no pixel out of focus: copied";
-    return;
-  }
+  const TileMap& tiles = plan.tiles.emplace(coc, focus.sharp_below, kTile, margin, team);
+  plan.nothing_blurred = skip && tiles.work_fraction() == 0;
+  if (plan.nothing_blurred) return plan;
   // No near (far) pixel: no near (far) layer, and no pass for it.
+  const double sharp_below = focus.sharp_below;
   const std::vector<double> near_d = layer_diameters(tiles.has_near() ? near_max : 0, sharp_below);
   const std::vector<double> far_d = layer_diameters(tiles.has_far() ? far_max : 0, sharp_below);
 
   const std::size_t pixels = std::size_t(width * height);
-  std::vector<std::int8_t> side_of(pixels, 0);
-  std::vector<Split> split_of(pixels);
+  plan.side_of.assign(pixels, 0);
+  plan.split_of.resize(pixels);
   // used[side][k]: some pixel has weight in layer k of that side (near side 0, far side 1).
   std::vector<char> used_near(near_d.size(), 0), used_far(far_d.size(), 0);
 #pragma omp parallel num_threads(team)
@@ -206,13 +208,13 @@ void run_pyramid_layers(Image& out, const Image& color, ConstPlane coc,
     for (std::ptrdiff_t y = 0; y < height; ++y)
       for (std::ptrdiff_t x = 0; x < width; ++x) {
         const float c = coc(x, y);
-        if (std::fabs(c) < sharp_below) continue;
+        if (focus.is_sharp(c)) continue;
         const std::size_t i = std::size_t(y * width + x);
         const bool near = c < 0;
         const double a = std::min(double(std::fabs(c)), kMaxDiameter);
         const Split s = split(a, near ? near_d : far_d);
-        side_of[i] = near ? -1 : 1;
-        split_of[i] = s;
+        plan.side_of[i] = near ? -1 : 1;
+        plan.split_of[i] = s;
         std::vector<char>& used = near ? local_near : local_far;
         if (s.upper < 1.f) used[std::size_t(s.lower)] = 1;
         if (s.upper > 0.f) used[std::size_t(s.lower + 1)] = 1;
@@ -223,118 +225,151 @@ void run_pyramid_layers(Image& out, const Image& color, ConstPlane coc,
     for (std::size_t k = 0; k < far_d.size(); ++k) used_far[k] |= local_far[k];
   }
   // Front to back: near from the largest |c| down, the sharp layer, far from the smallest up.
-  std::vector<Layer> layers;
-  int near_layers = 0, far_layers = 0;
   for (std::size_t k = near_d.size() - 1; k >= 1; --k)
     if (used_near[k]) {
-      layers.push_back({-1, int(k), near_d[k]});
-      ++near_layers;
+      plan.layers.push_back({-1, int(k), near_d[k]});
+      ++plan.near_layers;
     }
-  layers.push_back({0, 0, 0.0});
+  plan.layers.push_back({0, 0, 0.0});
   for (std::size_t k = 1; k < far_d.size(); ++k)
     if (used_far[k]) {
-      layers.push_back({1, int(k), far_d[k]});
-      ++far_layers;
+      plan.layers.push_back({1, int(k), far_d[k]});
+      ++plan.far_layers;
     }
-  report.stages.push_back({"layers", seconds_since(start)});
+  return plan;
+}
 
-  // 2. Per layer: premultiply, blur (not the sharp layer), composite "over" on the tiles that
-  // the layer may reach.
-  out.reset(width, height, channels);
-  Image transmit(width, height, 1);
-  const Plane trans = transmit.plane(0);
-  for (std::ptrdiff_t y = 0; y < height; ++y) std::fill_n(trans.row(y), width, 1.f);
-  Image premult(width, height, channels + 1), blurred;
-  if (near_layers + far_layers > 0) blurred.reset(width, height, channels + 1);
-  double blur_seconds = 0, composite_seconds = 0;
-  for (std::size_t l = 0; l < layers.size(); ++l) {
-    const Layer& layer = layers[l];
-    const bool sharp = layer.side == 0;
-    start = Clock::now();
-#pragma omp parallel for num_threads(team) schedule(static)
-    for (std::ptrdiff_t y = 0; y < height; ++y) {
-      float* alpha = premult.plane(channels).row(y);
-      for (std::ptrdiff_t x = 0; x < width; ++x) {
-        const std::size_t i = std::size_t(y * width + x);
-        alpha[x] = weight(side_of[i], split_of[i], layer);
-      }
-      for (int c = 0; c < channels; ++c) {
-        const float* in = color.plane(c).row(y);
-        float* o = premult.plane(c).row(y);
-#pragma omp simd
-        for (std::ptrdiff_t x = 0; x < width; ++x) o[x] = alpha[x] * in[x];
-      }
-    }
-    if (!sharp) {
-      // One pyramid per plane and thread: the planes are independent, and a pyramid's many
-      // small steps each open a parallel region that costs more than it gains on small levels.
-      const int planes = channels + 1;
-      const int outer = std::min(team, planes), inner = std::max(1, team / planes);
-#pragma omp parallel for num_threads(outer) schedule(dynamic)
-      for (int c = 0; c < planes; ++c)
-        blur_layer_plane(premult.plane(c), blurred.plane(c), layer.diameter / 4, inner);
-    }
-    blur_seconds += seconds_since(start);
-
-    start = Clock::now();
-    const Image& source = sharp ? premult : blurred;
-#pragma omp parallel num_threads(team)
-    {
-      std::vector<const float*> layer_rows(static_cast<std::size_t>(channels));
-      std::vector<float*> out_rows(static_cast<std::size_t>(channels));
-#pragma omp for schedule(static)
-      for (std::ptrdiff_t y = 0; y < height; ++y) {
-        for (int c = 0; c < channels; ++c) {
-          layer_rows[std::size_t(c)] = source.plane(c).row(y);
-          out_rows[std::size_t(c)] = out.plane(c).row(y);
-        }
-        const float* alpha = source.plane(channels).row(y);
-        float* t_row = trans.row(y);
-        for (std::ptrdiff_t tx = 0; tx < tiles.tiles_x(); ++tx) {
-          // Unreached tiles: copied at the end (skip), or only the sharp layer (no skip).
-          if (!tiles.needs_work(tx, y / kTile) && (skip || !sharp)) continue;
-          const std::ptrdiff_t x1 = std::min(width, (tx + 1) * kTile);
-          for (std::ptrdiff_t x = tx * kTile; x < x1; ++x) {
-            const float a = std::min(alpha[x], 1.f), t = t_row[x];
-            if (!(a > 0) || t == 0) continue;
-            for (int c = 0; c < channels; ++c) {
-              const float v = t * layer_rows[std::size_t(c)][x];
-              float& o = out_rows[std::size_t(c)][x];
-              o = o == 0 ? v : o + v;  // a first contribution keeps its sign, -0 too
-            }
-            t_row[x] = t * (1 - a);
-          }
-        }
-      }
-    }
-    composite_seconds += seconds_since(start);
-    if (settings.progress) settings.progress(0.99 * double(l + 1) / double(layers.size()));
-  }
-  report.stages.push_back({"premultiply and pyramids", blur_seconds});
-
-  // 3. Normalise by the accumulated coverage; copy the tiles nothing reaches.
-  start = Clock::now();
+// The layer's weights as alpha (plane `channels`) and the colour premultiplied by them; then,
+// for a blurred layer, its pyramid blur into `blurred`.
+void premultiply_and_blur(const DofFrame& frame, const LayerPlan& plan, const Layer& layer,
+                          Image& premult, Image& blurred) {
+  const Image& color = frame.color();
+  const std::ptrdiff_t width = color.width(), height = color.height();
+  const int channels = color.channels(), team = frame.threads();
 #pragma omp parallel for num_threads(team) schedule(static)
   for (std::ptrdiff_t y = 0; y < height; ++y) {
-    const float* t_row = trans.row(y);
+    float* alpha = premult.plane(channels).row(y);
+    for (std::ptrdiff_t x = 0; x < width; ++x) {
+      const std::size_t i = std::size_t(y * width + x);
+      alpha[x] = weight(plan.side_of[i], plan.split_of[i], layer);
+    }
     for (int c = 0; c < channels; ++c) {
+      const float* in = color.plane(c).row(y);
+      float* o = premult.plane(c).row(y);
+#pragma omp simd
+      for (std::ptrdiff_t x = 0; x < width; ++x) o[x] = alpha[x] * in[x];
+    }
+  }
+  if (layer.side == 0) return;
+  // One pyramid per plane and thread: the planes are independent, and a pyramid's many
+  // small steps each open a parallel region that costs more than it gains on small levels.
+  const int planes = channels + 1;
+  const int outer = std::min(team, planes), inner = std::max(1, team / planes);
+#pragma omp parallel for num_threads(outer) schedule(dynamic)
+  for (int c = 0; c < planes; ++c)
+    blur_layer_plane(premult.plane(c), blurred.plane(c), layer.diameter / 4, inner);
+}
+
+// "Over" of one layer (colour planes premultiplied, then alpha) onto row y of out, front to
+// back: out += t C, t *= 1 - alpha, on the given spans.
+void composite_row(const Image& source, Image& out, Plane transmit, std::ptrdiff_t y,
+                   const std::vector<Span>& spans) {
+  const int channels = out.channels();
+  const float* alpha = source.plane(channels).row(y);
+  float* t_row = transmit.row(y);
+  for (const auto& [x0, x1] : spans)
+    for (std::ptrdiff_t x = x0; x < x1; ++x) {
+      const float a = std::min(alpha[x], 1.f), t = t_row[x];
+      if (!(a > 0) || t == 0) continue;
+      for (int c = 0; c < channels; ++c) {
+        const float v = t * source.plane(c).row(y)[x];
+        float& o = out.plane(c).row(y)[x];
+        o = o == 0 ? v : o + v;  // a first contribution keeps its sign, -0 too
+      }
+      t_row[x] = t * (1 - a);
+    }
+}
+
+// Divides by the accumulated coverage where it is partial.
+void normalise(Image& out, ConstPlane transmit, int team) {
+#pragma omp parallel for num_threads(team) schedule(static)
+  for (std::ptrdiff_t y = 0; y < out.height(); ++y) {
+    const float* t_row = transmit.row(y);
+    for (int c = 0; c < out.channels(); ++c) {
       float* o = out.plane(c).row(y);
-      for (std::ptrdiff_t x = 0; x < width; ++x) {
+      for (std::ptrdiff_t x = 0; x < out.width(); ++x) {
         const float covered = 1 - t_row[x];
         if (covered > 0 && covered < 1) o[x] /= covered;
       }
     }
   }
-  if (skip)
-    for (int c = 0; c < channels; ++c)
-      copy_unreached_tiles(out.plane(c), color.plane(c), tiles, team);
-  report.stages.push_back({"composite", composite_seconds + seconds_since(start)});
+}
 
-  report.skipped_fraction = skip ? 1.0 - tiles.work_fraction() : 0.0;
-  report.layered = near_layers > 0;
+}  // namespace
+
+namespace dof_detail {
+
+void run_pyramid_layers(Image& out, const DofFrame& frame, const DofSettings& settings,
+                        DofReport& report) {
+  const Image& color = frame.color();
+  const std::ptrdiff_t width = color.width(), height = color.height();
+  const int channels = color.channels(), team = frame.threads();
+  const bool skip = settings.skip_in_focus;
+  Stages stages(report);
+
+  // 1. Tiles, the layers of each side from the CoC range present, every pixel's split.
+  const LayerPlan plan = plan_layers(frame, skip);
+  if (plan.nothing_blurred) {
+    // Nothing out of focus: the sharp layer alone, which is the input (what the full path gives
+    // bit for bit: weight 1, transmittance 1, no normalisation).
+    out = color;
+    stages.end("copy");
+    report.skipped_fraction = 1;
+    report.notes = "no pixel out of focus: copied";
+    return;
+  }
+  stages.end("layers");
+  const TiledGather gather(*plan.tiles, skip, team);
+  // A blurred layer is composited on the tiles it may reach; the sharp layer everywhere
+  // without skipping (with skipping the unreached tiles are copied at the end).
+  const TiledGather reached(*plan.tiles, true, team);
+
+  // 2. Per layer: premultiply, blur (not the sharp layer), composite "over".
+  out.reset(width, height, channels);
+  Image transmit(width, height, 1);
+  const Plane trans = transmit.plane(0);
+  for (std::ptrdiff_t y = 0; y < height; ++y) std::fill_n(trans.row(y), width, 1.f);
+  Image premult(width, height, channels + 1), blurred;
+  if (plan.near_layers + plan.far_layers > 0) blurred.reset(width, height, channels + 1);
+  double blur_seconds = 0, composite_seconds = 0;
+  for (std::size_t l = 0; l < plan.layers.size(); ++l) {
+    const Layer& layer = plan.layers[l];
+    const bool sharp = layer.side == 0;
+    stages.restart();
+    premultiply_and_blur(frame, plan, layer, premult, blurred);
+    blur_seconds += stages.lap();
+    const Image& source = sharp ? premult : blurred;
+    reached.for_each_row([] { return 0; },
+                         [&](std::ptrdiff_t y, const std::vector<Span>& spans, int) {
+                           composite_row(source, out, trans, y, spans);
+                         },
+                         sharp && !skip);
+    composite_seconds += stages.lap();
+    if (settings.progress) settings.progress(0.99 * double(l + 1) / double(plan.layers.size()));
+  }
+  stages.end("premultiply and pyramids", blur_seconds);
+
+  // 3. Normalise by the accumulated coverage; copy the tiles nothing reaches.
+  stages.restart();
+  normalise(out, trans, team);
+  gather.copy_the_rest(out, color);
+  stages.end("composite", composite_seconds);
+
+  report.skipped_fraction = gather.skipped_fraction();
+  report.layered = plan.near_layers > 0;
   char ratio[16];
   std::snprintf(ratio, sizeof ratio, "%g", kLayerRatio);
-  report.notes = std::to_string(near_layers) + " near + " + std::to_string(far_layers) +
+  report.notes = std::to_string(plan.near_layers) + " near + " + std::to_string(plan.far_layers) +
                  " far blurred layers (diameter ratio " + ratio +
                  ") + the sharp layer; quasi-convolution pyramids at sigma = D / 4";
   if (settings.progress) settings.progress(1.0);

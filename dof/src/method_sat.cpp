@@ -76,6 +76,8 @@
 #include "tridiff/dof/method.hpp"
 #include "tridiff/dof/tiles.hpp"
 #include "tridiff/solvers/solve.hpp"
+#include "frame.hpp"
+#include "tiled_gather.hpp"
 
 namespace tridiff {
 namespace {
@@ -88,11 +90,6 @@ constexpr std::array<double, 3> kExtent{1.0, 0.75, 0.5};
 // residues of about 16 eps_double x (cells in the frame) / (box area in cells), < 1e-7 up to
 // 16k x 16k frames; a true coverage this small weighs its layer by less than 1e-6.
 constexpr double kMinCoverage = 1e-6;
-
-using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t) {
-  return std::chrono::duration<double>(Clock::now() - t).count();
-}
 
 // The integral over [lo, hi] of a line of n half-resolution cells (cell i = [i, i + 1)) extended
 // by its edge values, as taps of the line's prefix table t(p), p in [-1, n), t(-1) = 0:
@@ -217,45 +214,13 @@ Image half_resolution(std::ptrdiff_t width, std::ptrdiff_t height, int planes, i
   return half;
 }
 
-// Runs pixel(x, y) on every pixel of the tiles that need work (all tiles without skipping),
-// then copies the others. OpenMP over tiles: every pixel is computed alone.
-template <class Pixel>
-void for_each_worked_pixel(const TileMap& tiles, bool skip, int team, Image& out,
-                           const Image& color, const Pixel& pixel) {
-  const std::ptrdiff_t count = tiles.tiles_x() * tiles.tiles_y();
-#pragma omp parallel for num_threads(team) schedule(dynamic)
-  for (std::ptrdiff_t t = 0; t < count; ++t) {
-    const std::ptrdiff_t tx = t % tiles.tiles_x(), ty = t / tiles.tiles_x();
-    if (skip && !tiles.needs_work(tx, ty)) continue;
-    const Rect area = tiles.rect(tx, ty);
-    for (std::ptrdiff_t y = area.y; y < area.y + area.height; ++y)
-      for (std::ptrdiff_t x = area.x; x < area.x + area.width; ++x) pixel(x, y, tiles.at(tx, ty));
-  }
-  if (skip)
-    for (int c = 0; c < color.channels(); ++c)
-      copy_unreached_tiles(out.plane(c), color.plane(c), tiles, team);
-}
-
-struct Common {
-  int team;
-  float sharp_below;
-  TileMap tiles;
-  bool skip;
-};
-
-Common prepare(Image& out, const Image& color, ConstPlane coc, const DofSettings& settings,
-               DofReport& report) {
-  validate_dof_input(color, coc);
-  const auto start = Clock::now();
-  const int team = detail::resolve_threads(settings.threads);
-  const float sharp_below = sharp_below_px(settings.in_focus_coc_px);
-  Common common{team, sharp_below,
-                TileMap(coc, sharp_below, TileMap::kDefaultTile, kHalfResMargin, team),
-                settings.skip_in_focus};
-  out.reset(color.width(), color.height(), color.channels());
-  report.skipped_fraction = common.skip ? 1.0 - common.tiles.work_fraction() : 0.0;
-  report.stages.push_back({"classify tiles", seconds_since(start)});
-  return common;
+// The tiles, with a margin for the half-resolution cells, and the output allocated.
+TileMap prepare(Image& out, const DofFrame& frame, dof_detail::Stages& stages) {
+  TileMap tiles(frame.coc(), frame.sharp_below(), TileMap::kDefaultTile, kHalfResMargin,
+                frame.threads());
+  out.reset(frame.width(), frame.height(), frame.channels());
+  stages.end("classify tiles");
+  return tiles;
 }
 
 std::string size_note(const Image& color) {
@@ -263,128 +228,158 @@ std::string size_note(const Image& color) {
          std::to_string((color.height() + 1) / 2) + ", replicate border, 3 boxes a pixel";
 }
 
+// The two layers' tables at half resolution: per layer channels x α C, then α, then α R.
+struct LayerTables {
+  std::vector<SummedAreaTable> far, near;  // empty: the layer is left out
+  std::size_t alpha = 0;                   // the index of α (the channel count)
+  std::ptrdiff_t cells_x = 0, cells_y = 0;
+};
+
+LayerTables layer_tables(const DofFrame& frame, bool has_far, bool has_near) {
+  const Image& color = frame.color();
+  const ConstPlane coc = frame.coc();
+  const int channels = color.channels(), team = frame.threads();
+  const std::ptrdiff_t width = color.width(), height = color.height();
+  const FocusTest focus = frame.focus();
+  LayerTables tables;
+  tables.alpha = std::size_t(channels);
+  tables.cells_x = (width + 1) / 2;
+  tables.cells_y = (height + 1) / 2;
+  if (has_far)
+    tables.far = build_tables(half_resolution(width, height, channels + 2, team,
+                                              [&](int k, std::ptrdiff_t x, std::ptrdiff_t y) {
+                                                const float c = coc(x, y);
+                                                if (!focus.is_far(c)) return 0.f;
+                                                if (k < channels) return color(x, y, k);
+                                                return k == channels ? 1.f : 0.5f * c;
+                                              }),
+                              team);
+  if (has_near)
+    tables.near = build_tables(half_resolution(width, height, channels + 2, team,
+                                               [&](int k, std::ptrdiff_t x, std::ptrdiff_t y) {
+                                                 const float c = coc(x, y);
+                                                 if (!focus.is_near(c)) return 0.f;
+                                                 if (k < channels) return color(x, y, k);
+                                                 return k == channels ? 1.f : -0.5f * c;
+                                               }),
+                               team);
+  return tables;
+}
+
+// sat-layers at pixel (x, y) of `tile`: the base (the pixel, or the far layer), the near layer
+// over it, renormalised by the union of their coverages.
+void composite_pixel(Image& out, const DofFrame& frame, const LayerTables& tables,
+                     std::ptrdiff_t x, std::ptrdiff_t y, const TileInfo& tile) {
+  const Image& color = frame.color();
+  const int channels = color.channels();
+  const FocusTest focus = frame.focus();
+  const float sharp_below = focus.sharp_below;
+  const std::vector<SummedAreaTable>& far = tables.far;
+  const std::vector<SummedAreaTable>& near = tables.near;
+  const std::size_t alpha = tables.alpha;
+  const std::ptrdiff_t cells_x = tables.cells_x, cells_y = tables.cells_y;
+  const bool has_near = !near.empty();
+  const float c = frame.coc()(x, y);
+  const double radius = 0.5 * std::fabs(double(c));
+  const bool sharp = focus.is_sharp(c);
+  // The base: the pixel itself, or the far layer normalised by its coverage, read with
+  // the pixel's radius, or behind a near pixel with the radius of the far pixels around.
+  ThreeBoxes back;
+  double back_cover = 0;
+  if (!sharp && !far.empty()) {
+    double back_radius = radius;
+    const bool found = c > 0 || layer_radius(far, alpha, x, y, tile.reach_radius,
+                                             0.5 * double(sharp_below), back_radius);
+    if (found) {
+      back = ThreeBoxes(x, y, back_radius, cells_x, cells_y);
+      if (back.any_coverage(far[alpha])) back_cover = back.mean(far[alpha]);
+    }
+  }
+  const bool has_base = sharp || back_cover > kMinCoverage;
+  // The near layer, in tiles that a near disc reaches.
+  ThreeBoxes front;
+  double front_cover = 0;
+  double front_radius = 0;
+  if (has_near && tile.near_reach_radius > 0 &&
+      layer_radius(near, alpha, x, y, tile.near_reach_radius, 0.5 * double(sharp_below),
+                   front_radius)) {
+    front = ThreeBoxes(x, y, front_radius, cells_x, cells_y);
+    if (front.any_coverage(near[alpha]))
+      front_cover = std::min(front.mean(near[alpha]), 1.0);
+  }
+  const bool has_front = front_cover > kMinCoverage;
+  // Near over the base with the coverages as alphas, renormalised by their union (what
+  // `scatter` does): continuous where the far coverage behind a near edge fades out.
+  const double base_alpha = sharp ? 1.0 : has_base ? std::min(back_cover, 1.0) : 0.0;
+  const double total = front_cover + (1 - front_cover) * base_alpha;
+  for (int ch = 0; ch < channels; ++ch) {
+    const std::size_t k = std::size_t(ch);
+    double v = sharp ? double(color(x, y, ch)) : 0.0;
+    if (!sharp && has_base) v = back.mean(far[k]) / back_cover;
+    if (has_front)
+      v = (front.mean(near[k]) + (1 - front_cover) * (has_base ? base_alpha * v : 0.0)) /
+          total;
+    // Neither layer in reach happens only through rounding: keep the input.
+    out(x, y, ch) = has_base || has_front ? static_cast<float>(v) : color(x, y, ch);
+  }
+}
+
 }  // namespace
 
 namespace dof_detail {
 
-void run_sat(Image& out, const Image& color, ConstPlane coc, const DofSettings& settings,
-             DofReport& report) {
-  const Common common = prepare(out, color, coc, settings, report);
-  const int channels = color.channels();
-  const bool any_blur = common.tiles.max_radius() > 0;
+void run_sat(Image& out, const DofFrame& frame, const DofSettings& settings, DofReport& report) {
+  const Image& color = frame.color();
+  const ConstPlane coc = frame.coc();
+  const int channels = color.channels(), team = frame.threads();
+  Stages stages(report);
+  const TileMap tiles = prepare(out, frame, stages);
+  const TiledGather gather(tiles, settings.skip_in_focus, team);
+  report.skipped_fraction = gather.skipped_fraction();
 
-  auto start = Clock::now();
   std::vector<SummedAreaTable> tables;
-  if (any_blur || !common.skip)
+  if (tiles.max_radius() > 0 || !gather.skip())
     tables = build_tables(
-        half_resolution(color.width(), color.height(), channels, common.team,
+        half_resolution(color.width(), color.height(), channels, team,
                         [&](int c, std::ptrdiff_t x, std::ptrdiff_t y) { return color(x, y, c); }),
-        common.team);
-  report.stages.push_back({"half-resolution tables", seconds_since(start)});
+        team);
+  stages.end("half-resolution tables");
 
-  start = Clock::now();
   const std::ptrdiff_t cells_x = (color.width() + 1) / 2, cells_y = (color.height() + 1) / 2;
-  for_each_worked_pixel(
-      common.tiles, common.skip, common.team, out, color,
-      [&](std::ptrdiff_t x, std::ptrdiff_t y, const TileInfo&) {
-        const float c = coc(x, y);
-        if (std::fabs(c) < common.sharp_below) {
-          for (int ch = 0; ch < channels; ++ch) out(x, y, ch) = color(x, y, ch);
-          return;
-        }
-        const ThreeBoxes boxes(x, y, 0.5 * std::fabs(double(c)), cells_x, cells_y);
-        for (int ch = 0; ch < channels; ++ch)
-          out(x, y, ch) = static_cast<float>(boxes.mean(tables[std::size_t(ch)]));
-      });
-  report.stages.push_back({"gather", seconds_since(start)});
+  const FocusTest focus = frame.focus();
+  gather.for_each_pixel([&](std::ptrdiff_t x, std::ptrdiff_t y, const TileInfo&) {
+    const float c = coc(x, y);
+    if (focus.is_sharp(c)) {
+      for (int ch = 0; ch < channels; ++ch) out(x, y, ch) = color(x, y, ch);
+      return;
+    }
+    const ThreeBoxes boxes(x, y, 0.5 * std::fabs(double(c)), cells_x, cells_y);
+    for (int ch = 0; ch < channels; ++ch)
+      out(x, y, ch) = static_cast<float>(boxes.mean(tables[std::size_t(ch)]));
+  });
+  gather.copy_the_rest(out, color);
+  stages.end("gather");
   report.layered = false;
   report.notes = size_note(color);
   if (settings.progress) settings.progress(1.0);
 }
 
-void run_sat_layers(Image& out, const Image& color, ConstPlane coc, const DofSettings& settings,
+void run_sat_layers(Image& out, const DofFrame& frame, const DofSettings& settings,
                     DofReport& report) {
-  const Common common = prepare(out, color, coc, settings, report);
-  const int channels = color.channels();
-  const std::ptrdiff_t width = color.width(), height = color.height();
-  const float sharp_below = common.sharp_below;
-  const bool has_near = common.tiles.has_near();
-  const bool has_far = common.tiles.has_far() || !common.skip;
+  const Image& color = frame.color();
+  Stages stages(report);
+  const TileMap tiles = prepare(out, frame, stages);
+  const TiledGather gather(tiles, settings.skip_in_focus, frame.threads());
+  report.skipped_fraction = gather.skipped_fraction();
+  const bool has_near = tiles.has_near();
+  const LayerTables tables = layer_tables(frame, tiles.has_far() || !gather.skip(), has_near);
+  stages.end("half-resolution tables");
 
-  // Per layer the tables of channels x α C, then α, then α R.
-  auto start = Clock::now();
-  std::vector<SummedAreaTable> far, near;
-  if (has_far)
-    far = build_tables(half_resolution(width, height, channels + 2, common.team,
-                                       [&](int k, std::ptrdiff_t x, std::ptrdiff_t y) {
-                                         const float c = coc(x, y);
-                                         if (!(c >= sharp_below)) return 0.f;
-                                         if (k < channels) return color(x, y, k);
-                                         return k == channels ? 1.f : 0.5f * c;
-                                       }),
-                       common.team);
-  if (has_near)
-    near = build_tables(half_resolution(width, height, channels + 2, common.team,
-                                        [&](int k, std::ptrdiff_t x, std::ptrdiff_t y) {
-                                          const float c = coc(x, y);
-                                          if (!(c <= -sharp_below)) return 0.f;
-                                          if (k < channels) return color(x, y, k);
-                                          return k == channels ? 1.f : -0.5f * c;
-                                        }),
-                        common.team);
-  report.stages.push_back({"half-resolution tables", seconds_since(start)});
-
-  start = Clock::now();
-  const std::ptrdiff_t cells_x = (width + 1) / 2, cells_y = (height + 1) / 2;
-  const std::size_t alpha = std::size_t(channels);
-  for_each_worked_pixel(
-      common.tiles, common.skip, common.team, out, color,
-      [&](std::ptrdiff_t x, std::ptrdiff_t y, const TileInfo& tile) {
-        const float c = coc(x, y);
-        const double radius = 0.5 * std::fabs(double(c));
-        const bool sharp = std::fabs(c) < sharp_below;
-        // The base: the pixel itself, or the far layer normalised by its coverage, read with
-        // the pixel's radius, or behind a near pixel with the radius of the far pixels around.
-        ThreeBoxes back;
-        double back_cover = 0;
-        if (!sharp && !far.empty()) {
-          double back_radius = radius;
-          const bool found = c > 0 || layer_radius(far, alpha, x, y, tile.reach_radius,
-                                                   0.5 * double(sharp_below), back_radius);
-          if (found) {
-            back = ThreeBoxes(x, y, back_radius, cells_x, cells_y);
-            if (back.any_coverage(far[alpha])) back_cover = back.mean(far[alpha]);
-          }
-        }
-        const bool has_base = sharp || back_cover > kMinCoverage;
-        // The near layer, in tiles that a near disc reaches.
-        ThreeBoxes front;
-        double front_cover = 0;
-        double front_radius = 0;
-        if (has_near && tile.near_reach_radius > 0 &&
-            layer_radius(near, alpha, x, y, tile.near_reach_radius, 0.5 * double(sharp_below),
-                         front_radius)) {
-          front = ThreeBoxes(x, y, front_radius, cells_x, cells_y);
-          if (front.any_coverage(near[alpha]))
-            front_cover = std::min(front.mean(near[alpha]), 1.0);
-        }
-        const bool has_front = front_cover > kMinCoverage;
-        // Near over the base with the coverages as alphas, renormalised by their union (what
-        // `scatter` does): continuous where the far coverage behind a near edge fades out.
-        const double base_alpha = sharp ? 1.0 : has_base ? std::min(back_cover, 1.0) : 0.0;
-        const double total = front_cover + (1 - front_cover) * base_alpha;
-        for (int ch = 0; ch < channels; ++ch) {
-          const std::size_t k = std::size_t(ch);
-          double v = sharp ? double(color(x, y, ch)) : 0.0;
-          if (!sharp && has_base) v = back.mean(far[k]) / back_cover;
-          if (has_front)
-            v = (front.mean(near[k]) + (1 - front_cover) * (has_base ? base_alpha * v : 0.0)) /
-                total;
-          // Neither layer in reach happens only through rounding: keep the input.
-          out(x, y, ch) = has_base || has_front ? static_cast<float>(v) : color(x, y, ch);
-        }
-      });
-  report.stages.push_back({"gather and composite", seconds_since(start)});
+  gather.for_each_pixel([&](std::ptrdiff_t x, std::ptrdiff_t y, const TileInfo& tile) {
+    composite_pixel(out, frame, tables, x, y, tile);
+  });
+  gather.copy_the_rest(out, color);
+  stages.end("gather and composite");
   report.layered = has_near;
   report.notes = size_note(color) + (has_near ? ", near layer over far layer"
                                               : ", no near pixel: far layer only");

@@ -60,6 +60,8 @@
 #include "tridiff/dof/tiles.hpp"
 #include "tridiff/solvers/solve.hpp"
 #include "stage_clock.hpp"
+#include "frame.hpp"
+#include "tiled_gather.hpp"  // Stages
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -67,6 +69,8 @@
 
 namespace tridiff {
 namespace {
+
+using dof_detail::Stages;
 
 constexpr std::ptrdiff_t kTile = 32;
 constexpr float kMaxDiameter = 16384.f;  // px
@@ -108,10 +112,10 @@ inline std::ptrdiff_t row_half_width(double outer, std::ptrdiff_t dy) {
   return s > 0 ? static_cast<std::ptrdiff_t>(std::floor(std::sqrt(s))) : -1;
 }
 
-Disc make_disc(float coc, float point_below) {
+Disc make_disc(float coc, FocusTest focus) {
   Disc disc;
   const double diameter = std::fabs(double(coc));
-  if (diameter < point_below) return disc;
+  if (focus.is_sharp(coc)) return disc;
   disc.outer = static_cast<float>(0.5 * diameter + 0.5);
   disc.reach = static_cast<std::int32_t>(std::ceil(disc.outer)) - 1;
   // The sum of the coverages over one quadrant, by symmetry: the centre once, the axes twice
@@ -143,54 +147,66 @@ struct Box {
   }
 };
 
-}  // namespace
-
-namespace dof_detail {
-
-void run_scatter(Image& out, const Image& color, ConstPlane coc, const DofSettings& settings,
-                 DofReport& report) {
-  validate_dof_input(color, coc);
-  const int team = detail::resolve_threads(settings.threads);
-  const std::ptrdiff_t width = color.width(), height = color.height();
-  const int channels = color.channels();
-  const float point_below = sharp_below_px(settings.in_focus_coc_px);
-  if (width * height > std::numeric_limits<std::int32_t>::max())
+// A disc beyond kMaxDiameter px would take hours: refused rather than clamped silently, naming
+// the first such pixel.
+void refuse_what_takes_too_long(const DofFrame& frame) {
+  if (frame.width() * frame.height() > std::numeric_limits<std::int32_t>::max())
     throw InvalidArgument("color", -1, -1, "has more than 2^31 pixels");
-  // A disc beyond kMaxDiameter px would take hours; refuse it rather than clamp it silently.
-  for (std::ptrdiff_t y = 0; y < height; ++y)
-    for (std::ptrdiff_t x = 0; x < width; ++x)
+  if (frame.max_abs_coc() <= kMaxDiameter) return;
+  const ConstPlane coc = frame.coc();
+  for (std::ptrdiff_t y = 0; y < coc.height(); ++y)
+    for (std::ptrdiff_t x = 0; x < coc.width(); ++x)
       if (std::fabs(coc(x, y)) > kMaxDiameter)
         throw InvalidArgument("coc", -1, -1,
                               "pixel (" + std::to_string(x) + ", " + std::to_string(y) +
                                   ") has |CoC| " + std::to_string(std::fabs(coc(x, y))) +
                                   " px; the scatter reference takes at most " +
                                   std::to_string(int(kMaxDiameter)) + " px");
-  using Clock = StageClock;
+}
 
-  // 1. Every pixel's disc (its normaliser: a sum over the whole disc, computed once).
-  auto start = Clock::now();
+// 1. Every pixel's disc (its normaliser: a sum over the whole disc, computed once).
+std::vector<Disc> make_discs(const DofFrame& frame) {
+  const ConstPlane coc = frame.coc();
+  const std::ptrdiff_t width = frame.width(), height = frame.height();
+  const FocusTest focus = frame.focus();
   std::vector<Disc> discs(std::size_t(width * height));
-#pragma omp parallel for num_threads(team) schedule(static)
+#pragma omp parallel for num_threads(frame.threads()) schedule(static)
   for (std::ptrdiff_t y = 0; y < height; ++y) {
     float last_coc = 0;
-    Disc last = make_disc(0.f, point_below);
+    Disc last = make_disc(0.f, focus);
     for (std::ptrdiff_t x = 0; x < width; ++x) {
       const float c = std::fabs(coc(x, y));
       if (c != last_coc) {
-        last = make_disc(c, point_below);
+        last = make_disc(c, focus);
         last_coc = c;
       }
       discs[std::size_t(y * width + x)] = last;
     }
   }
+  return discs;
+}
 
-  // 2. The tiles that some disc reaches (all of them without skipping).
-  const std::ptrdiff_t tiles_x = (width + kTile - 1) / kTile,
-                       tiles_y = (height + kTile - 1) / kTile;
-  std::vector<char> worked(std::size_t(tiles_x * tiles_y), settings.skip_in_focus ? 0 : 1);
-  if (settings.skip_in_focus) {
+// 2. The kTile squares that some disc reaches after the mirror fold (all of them without
+// skipping), and the pixels of the others.
+struct WorkedTiles {
+  std::ptrdiff_t tiles_x = 0;
+  std::vector<char> worked;
+  std::ptrdiff_t skipped = 0;
+  bool at(std::ptrdiff_t x, std::ptrdiff_t y) const {
+    return worked[std::size_t(y / kTile * tiles_x + x / kTile)] != 0;
+  }
+};
+
+WorkedTiles worked_tiles(const DofFrame& frame, const std::vector<Disc>& discs, bool skip) {
+  const std::ptrdiff_t width = frame.width(), height = frame.height();
+  WorkedTiles tiles;
+  tiles.tiles_x = (width + kTile - 1) / kTile;
+  const std::ptrdiff_t tiles_x = tiles.tiles_x, tiles_y = (height + kTile - 1) / kTile;
+  std::vector<char>& worked = tiles.worked;
+  worked.assign(std::size_t(tiles_x * tiles_y), skip ? 0 : 1);
+  if (skip) {
     std::vector<std::ptrdiff_t> tile_reach(worked.size(), -1);
-#pragma omp parallel for num_threads(team) schedule(static)
+#pragma omp parallel for num_threads(frame.threads()) schedule(static)
     for (std::ptrdiff_t t = 0; t < tiles_x * tiles_y; ++t) {
       const std::ptrdiff_t tx = t % tiles_x * kTile, ty = t / tiles_x * kTile;
       for (std::ptrdiff_t y = ty; y < std::min(ty + kTile, height); ++y)
@@ -210,44 +226,177 @@ void run_scatter(Image& out, const Image& color, ConstPlane coc, const DofSettin
         for (std::ptrdiff_t i = x0 / kTile; i <= x1 / kTile; ++i) worked[j * tiles_x + i] = 1;
     }
   }
-  std::ptrdiff_t skipped = 0;
   for (std::ptrdiff_t t = 0; t < tiles_x * tiles_y; ++t)
     if (!worked[t])
-      skipped += (std::min(t % tiles_x * kTile + kTile, width) - t % tiles_x * kTile) *
-                 (std::min(t / tiles_x * kTile + kTile, height) - t / tiles_x * kTile);
-  auto tile_worked = [&](std::ptrdiff_t x, std::ptrdiff_t y) {
-    return worked[std::size_t(y / kTile * tiles_x + x / kTile)] != 0;
-  };
+      tiles.skipped += (std::min(t % tiles_x * kTile + kTile, width) - t % tiles_x * kTile) *
+                       (std::min(t / tiles_x * kTile + kTile, height) - t / tiles_x * kTile);
+  return tiles;
+}
 
-  // 3. The sources of the worked tiles sorted into depth layers, raster order within a layer.
-  std::vector<std::pair<std::int32_t, std::int32_t>> sources;
-  sources.reserve(std::size_t(width * height - skipped));
+// 3. The sources of the worked tiles sorted into depth layers, raster order within a layer:
+// layer l is sources[start[l] ... start[l + 1]).
+struct DepthLayers {
+  std::vector<std::pair<std::int32_t, std::int32_t>> sources;  // (layer key, pixel index)
+  std::vector<std::size_t> start;
+  std::size_t count() const { return start.size() - 1; }
+};
+
+DepthLayers sort_into_layers(const DofFrame& frame, const WorkedTiles& tiles) {
+  const ConstPlane coc = frame.coc();
+  const std::ptrdiff_t width = frame.width(), height = frame.height();
+  DepthLayers layers;
+  auto& sources = layers.sources;
+  sources.reserve(std::size_t(width * height - tiles.skipped));
   for (std::ptrdiff_t y = 0; y < height; ++y)
     for (std::ptrdiff_t x = 0; x < width; ++x)
-      if (tile_worked(x, y))
+      if (tiles.at(x, y))
         sources.emplace_back(layer_key(coc(x, y)), std::int32_t(y * width + x));
   std::sort(sources.begin(), sources.end());
-  std::vector<std::size_t> layer_start;
   for (std::size_t i = 0; i < sources.size(); ++i)
-    if (i == 0 || sources[i].first != sources[i - 1].first) layer_start.push_back(i);
-  const std::size_t layers = layer_start.size();
-  layer_start.push_back(sources.size());
-  report.stages.push_back({"discs and layers", seconds_since(start)});
+    if (i == 0 || sources[i].first != sources[i - 1].first) layers.start.push_back(i);
+  layers.start.push_back(sources.size());
+  return layers;
+}
+
+// One depth layer being splatted: premultiplied colour (channels planes), then coverage, in
+// double — thousands of similar small weights added to a float drift by a systematic rounding
+// (1e-4 for D = 130).
+struct LayerSums {
+  std::ptrdiff_t width;
+  std::size_t plane_size;
+  std::vector<double> values;
+  double* cover;
+
+  LayerSums(std::ptrdiff_t w, std::ptrdiff_t h, int channels)
+      : width(w),
+        plane_size(std::size_t(w * h)),
+        values(plane_size * std::size_t(channels + 1), 0.0),
+        cover(values.data() + plane_size * std::size_t(channels)) {}
+  std::size_t at(std::ptrdiff_t x, std::ptrdiff_t y) const { return std::size_t(y * width + x); }
+};
+
+// 4a. Splats the part of every disc of layer l that falls in rows [band0, band1); returns the
+// box of the pixels it touched.
+Box splat_band(const DofFrame& frame, const std::vector<Disc>& discs, const DepthLayers& layers,
+               std::size_t l, std::ptrdiff_t band0, std::ptrdiff_t band1, LayerSums& sums,
+               std::vector<double>& lanes) {
+  const Image& color = frame.color();
+  const std::ptrdiff_t width = frame.width(), height = frame.height();
+  const int channels = frame.channels();
+  const std::size_t plane_size = sums.plane_size;
+  double* const cover = sums.cover;
+  Box box{width, height, 0, 0};
+  for (std::size_t s = layers.start[l]; s < layers.start[l + 1]; ++s) {
+    const std::ptrdiff_t index = layers.sources[s].second;
+    const std::ptrdiff_t qx = index % width, qy = index / width;
+    const Disc& disc = discs[std::size_t(index)];
+    if (disc.reach < 0) {  // a point: weight 1 at its own pixel
+      if (qy < band0 || qy >= band1) continue;
+      const std::size_t i = sums.at(qx, qy);
+      const double a = cover[i];
+      for (int c = 0; c < channels; ++c) {
+        double& v = sums.values[i + plane_size * std::size_t(c)];
+        v = a == 0 ? double(color(qx, qy, c)) : v + double(color(qx, qy, c));
+      }
+      cover[i] = a + 1.0;
+      box.add(qx, qy);
+      continue;
+    }
+    const std::ptrdiff_t reach = disc.reach;
+    if (qy - reach >= 0 && qy + reach < height && (qy + reach < band0 || qy - reach >= band1))
+      continue;  // no fold, and the disc's rows miss the band
+    for (int c = 0; c < channels; ++c) lanes[std::size_t(c)] = double(color(qx, qy, c));
+    for (std::ptrdiff_t dy = -reach; dy <= reach; ++dy) {
+      const std::ptrdiff_t ty = fold(qy + dy, height);
+      if (ty < band0 || ty >= band1) continue;
+      const std::ptrdiff_t hx = row_half_width(disc.outer, dy);
+      if (hx < 0) continue;
+      const bool inside = qx - hx >= 0 && qx + hx < width;
+      double* cover_row = cover + sums.at(0, ty);
+      double* colour_row = sums.values.data() + sums.at(0, ty);
+      for (std::ptrdiff_t dx = -hx; dx <= hx; ++dx) {
+        const double cov = coverage(disc.outer, dx, dy);
+        if (!(cov > 0)) continue;
+        const double w = cov * disc.inv_sum;
+        const std::ptrdiff_t tx = inside ? qx + dx : fold(qx + dx, width);
+        const double a = cover_row[tx];
+        for (int c = 0; c < channels; ++c) {
+          double& v = colour_row[std::size_t(tx) + plane_size * std::size_t(c)];
+          v = a == 0 ? w * lanes[std::size_t(c)] : v + w * lanes[std::size_t(c)];
+        }
+        cover_row[tx] = a + w;
+        box.add(tx, ty);
+      }
+    }
+  }
+  return box;
+}
+
+// 4b. Composites the splatted layer "over" what is in front of it on `box`, and clears it.
+void composite_box(const Box& box, LayerSums& sums, Image& out, Plane trans) {
+  const int channels = out.channels();
+  const std::size_t plane_size = sums.plane_size;
+  for (std::ptrdiff_t y = box.y0; y < box.y1; ++y) {
+    double* cover_row = sums.cover + sums.at(0, y);
+    double* colour_row = sums.values.data() + sums.at(0, y);
+    float* trans_row = trans.row(y);
+    for (std::ptrdiff_t x = box.x0; x < box.x1; ++x) {
+      const double a = cover_row[x];
+      if (a == 0) continue;
+      const float t = trans_row[x];
+      if (t != 0) {
+        for (int c = 0; c < channels; ++c) {
+          const double sum = colour_row[std::size_t(x) + plane_size * std::size_t(c)];
+          const float v = static_cast<float>(a > 1 ? sum / a : sum);
+          out(x, y, c) = t == 1 ? v : out(x, y, c) + t * v;
+        }
+        trans_row[x] = a >= 1 ? 0.f : static_cast<float>(t * (1.0 - a));
+      }
+      cover_row[x] = 0;
+      for (int c = 0; c < channels; ++c) colour_row[std::size_t(x) + plane_size * std::size_t(c)] = 0;
+    }
+  }
+}
+
+// 4c. Normalises rows [band0, band1) by the accumulated coverage; copies the skipped tiles.
+void finish_band(const DofFrame& frame, const WorkedTiles& tiles, ConstPlane trans,
+                 std::ptrdiff_t band0, std::ptrdiff_t band1, Image& out) {
+  const Image& color = frame.color();
+  const int channels = frame.channels();
+  for (std::ptrdiff_t y = band0; y < band1; ++y)
+    for (std::ptrdiff_t x = 0; x < frame.width(); ++x) {
+      if (!tiles.at(x, y)) {
+        for (int c = 0; c < channels; ++c) out(x, y, c) = color(x, y, c);
+        continue;
+      }
+      const float covered = 1.f - trans(x, y);
+      if (covered < 1 && covered > 0)
+        for (int c = 0; c < channels; ++c) out(x, y, c) /= covered;
+    }
+}
+
+}  // namespace
+
+namespace dof_detail {
+
+void run_scatter(Image& out, const DofFrame& frame, const DofSettings& settings,
+                 DofReport& report) {
+  refuse_what_takes_too_long(frame);
+  const std::ptrdiff_t width = frame.width(), height = frame.height();
+  const int channels = frame.channels();
+  Stages stages(report);
+  const std::vector<Disc> discs = make_discs(frame);
+  const WorkedTiles tiles = worked_tiles(frame, discs, settings.skip_in_focus);
+  const DepthLayers layers = sort_into_layers(frame, tiles);
+  stages.end("discs and layers");
 
   // 4. Splat and composite, layer by layer, each thread in its band of rows.
-  start = Clock::now();
   out.reset(width, height, channels);
-  // The layer: premultiplied colour (channels planes), then coverage, in double — thousands of
-  // similar small weights added to a float drift by a systematic rounding (1e-4 for D = 130).
-  const std::size_t plane_size = std::size_t(width * height);
-  std::vector<double> layer(plane_size * std::size_t(channels + 1), 0.0);
-  double* const cover = layer.data() + plane_size * std::size_t(channels);
-  auto at = [&](std::ptrdiff_t x, std::ptrdiff_t y) { return std::size_t(y * width + x); };
+  LayerSums sums(width, height, channels);
   Image transmit(width, height, 1);
   for (std::ptrdiff_t y = 0; y < height; ++y) std::fill_n(transmit.plane(0).row(y), width, 1.f);
   const Plane trans = transmit.plane(0);
-
-#pragma omp parallel num_threads(team)
+#pragma omp parallel num_threads(frame.threads())
   {
 #ifdef _OPENMP
     const int thread = omp_get_thread_num(), threads = omp_get_num_threads();
@@ -256,91 +405,17 @@ void run_scatter(Image& out, const Image& color, ConstPlane coc, const DofSettin
 #endif
     const std::ptrdiff_t band0 = height * thread / threads, band1 = height * (thread + 1) / threads;
     std::vector<double> lanes(static_cast<std::size_t>(channels));
-    for (std::size_t l = 0; l < layers && band0 < band1; ++l) {
-      Box box{width, height, 0, 0};
-      for (std::size_t s = layer_start[l]; s < layer_start[l + 1]; ++s) {
-        const std::ptrdiff_t index = sources[s].second;
-        const std::ptrdiff_t qx = index % width, qy = index / width;
-        const Disc& disc = discs[std::size_t(index)];
-        if (disc.reach < 0) {  // a point: weight 1 at its own pixel
-          if (qy < band0 || qy >= band1) continue;
-          const std::size_t i = at(qx, qy);
-          const double a = cover[i];
-          for (int c = 0; c < channels; ++c) {
-            double& v = layer[i + plane_size * std::size_t(c)];
-            v = a == 0 ? double(color(qx, qy, c)) : v + double(color(qx, qy, c));
-          }
-          cover[i] = a + 1.0;
-          box.add(qx, qy);
-          continue;
-        }
-        const std::ptrdiff_t reach = disc.reach;
-        if (qy - reach >= 0 && qy + reach < height && (qy + reach < band0 || qy - reach >= band1))
-          continue;  // no fold, and the disc's rows miss the band
-        for (int c = 0; c < channels; ++c) lanes[std::size_t(c)] = double(color(qx, qy, c));
-        for (std::ptrdiff_t dy = -reach; dy <= reach; ++dy) {
-          const std::ptrdiff_t ty = fold(qy + dy, height);
-          if (ty < band0 || ty >= band1) continue;
-          const std::ptrdiff_t hx = row_half_width(disc.outer, dy);
-          if (hx < 0) continue;
-          const bool inside = qx - hx >= 0 && qx + hx < width;
-          double* cover_row = cover + at(0, ty);
-          double* colour_row = layer.data() + at(0, ty);
-          for (std::ptrdiff_t dx = -hx; dx <= hx; ++dx) {
-            const double cov = coverage(disc.outer, dx, dy);
-            if (!(cov > 0)) continue;
-            const double w = cov * disc.inv_sum;
-            const std::ptrdiff_t tx = inside ? qx + dx : fold(qx + dx, width);
-            const double a = cover_row[tx];
-            for (int c = 0; c < channels; ++c) {
-              double& v = colour_row[std::size_t(tx) + plane_size * std::size_t(c)];
-              v = a == 0 ? w * lanes[std::size_t(c)] : v + w * lanes[std::size_t(c)];
-            }
-            cover_row[tx] = a + w;
-            box.add(tx, ty);
-          }
-        }
-      }
-      // Composite the layer "over" what is in front of it, and clear it.
-      for (std::ptrdiff_t y = box.y0; y < box.y1; ++y) {
-        double* cover_row = cover + at(0, y);
-        double* colour_row = layer.data() + at(0, y);
-        float* trans_row = trans.row(y);
-        for (std::ptrdiff_t x = box.x0; x < box.x1; ++x) {
-          const double a = cover_row[x];
-          if (a == 0) continue;
-          const float t = trans_row[x];
-          if (t != 0) {
-            for (int c = 0; c < channels; ++c) {
-              const double sum = colour_row[std::size_t(x) + plane_size * std::size_t(c)];
-              const float v = static_cast<float>(a > 1 ? sum / a : sum);
-              out(x, y, c) = t == 1 ? v : out(x, y, c) + t * v;
-            }
-            trans_row[x] = a >= 1 ? 0.f : static_cast<float>(t * (1.0 - a));
-          }
-          cover_row[x] = 0;
-          for (int c = 0; c < channels; ++c)
-            colour_row[std::size_t(x) + plane_size * std::size_t(c)] = 0;
-        }
-      }
+    for (std::size_t l = 0; l < layers.count() && band0 < band1; ++l) {
+      const Box box = splat_band(frame, discs, layers, l, band0, band1, sums, lanes);
+      composite_box(box, sums, out, trans);
       if (thread == 0 && settings.progress)
-        settings.progress(0.99 * double(l + 1) / double(layers));
+        settings.progress(0.99 * double(l + 1) / double(layers.count()));
     }
-    // Normalise by the accumulated coverage; copy the skipped tiles.
-    for (std::ptrdiff_t y = band0; y < band1; ++y)
-      for (std::ptrdiff_t x = 0; x < width; ++x) {
-        if (!tile_worked(x, y)) {
-          for (int c = 0; c < channels; ++c) out(x, y, c) = color(x, y, c);
-          continue;
-        }
-        const float covered = 1.f - trans(x, y);
-        if (covered < 1 && covered > 0)
-          for (int c = 0; c < channels; ++c) out(x, y, c) /= covered;
-      }
+    finish_band(frame, tiles, trans, band0, band1, out);
   }
-  report.stages.push_back({"splat and composite", seconds_since(start)});
-  report.skipped_fraction = double(skipped) / double(width * height);
-  report.notes = std::to_string(layers) + " depth layers of 1 px CoC";
+  stages.end("splat and composite");
+  report.skipped_fraction = double(tiles.skipped) / double(width * height);
+  report.notes = std::to_string(layers.count()) + " depth layers of 1 px CoC";
   if (settings.progress) settings.progress(1.0);
 }
 

@@ -1,31 +1,37 @@
-// The registry of depth-of-field methods: one line per method.
+// The registry of depth-of-field methods (one entry per method), and the checked frame that
+// every method is run on (frame.hpp).
+#include <algorithm>
 #include <array>
 #include <cmath>
+#include <stdexcept>
 #include <string>
 
 #include "tridiff/dof/method.hpp"
+#include "tridiff/solvers/solve.hpp"  // detail::resolve_threads
+#include "frame.hpp"
 
 namespace tridiff {
 namespace dof_detail {
-void run_adi(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
-void run_mpad(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
-void run_ipf(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
-void run_scatter(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
-void run_auto(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
-void run_poisson(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
-void run_pyramid_layers(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
-void run_sat(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
-void run_sat_layers(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
-void run_gems(Image&, const Image&, ConstPlane, const DofSettings&, DofReport&);
+void run_adi(Image&, const DofFrame&, const DofSettings&, DofReport&);
+void run_mpad(Image&, const DofFrame&, const DofSettings&, DofReport&);
+void run_ipf(Image&, const DofFrame&, const DofSettings&, DofReport&);
+void run_scatter(Image&, const DofFrame&, const DofSettings&, DofReport&);
+void run_auto(Image&, const DofFrame&, const DofSettings&, DofReport&);
+void run_poisson(Image&, const DofFrame&, const DofSettings&, DofReport&);
+void run_pyramid_layers(Image&, const DofFrame&, const DofSettings&, DofReport&);
+void run_sat(Image&, const DofFrame&, const DofSettings&, DofReport&);
+void run_sat_layers(Image&, const DofFrame&, const DofSettings&, DofReport&);
+void run_gems(Image&, const DofFrame&, const DofSettings&, DofReport&);
 }  // namespace dof_detail
 
 namespace {
 
+const DofMethod& registered_with(DofKernel kernel);
+
 // Every method runs through this. It refuses a CoC plane inside out (out is reallocated, or
-// written, while the CoC is still read), and gives a method that cannot work in place a copy
-// of the colour when out is the colour (it would reallocate out before reading it). `auto`
-// passes out == color on to the method it runs, whose own wrapper decides.
-template <DofRun Run, bool kInPlace>
+// written, while the CoC is still read), checks and analyses the frame once (DofFrame), and
+// runs the method on it (run_on_frame).
+template <DofKernel Kernel>
 void checked(Image& out, const Image& color, ConstPlane coc, const DofSettings& settings,
              DofReport& report) {
   if (!out.empty() && coc.data()) {
@@ -34,42 +40,101 @@ void checked(Image& out, const Image& color, ConstPlane coc, const DofSettings& 
     if (coc.data() >= begin && coc.data() < end)
       throw InvalidArgument("coc", -1, -1, "lies in the output image (give a separate plane)");
   }
-  if (kInPlace || &out != &color) return Run(out, color, coc, settings, report);
-  const Image input = color;
-  Run(out, input, coc, settings, report);
+  const DofFrame frame(color, coc, settings);
+  // `auto` copies nothing itself: the method it chooses decides (run_on_frame).
+  if (Kernel == dof_detail::run_auto) return Kernel(out, frame, settings, report);
+  dof_detail::run_on_frame(registered_with(Kernel), out, frame, settings, report);
+}
+
+// A registry entry: the method's description, run through `checked`.
+template <DofKernel Kernel>
+constexpr DofMethod method(DofMethod description) {
+  description.run = checked<Kernel>;
+  description.kernel = Kernel;
+  return description;
 }
 
 constexpr std::array kMethods{
-    DofMethod{"adi", "implicit heat diffusion, one ADI step of tridiagonal solves (seed 000 §3.5)",
-              false, true, "O(pixels), independent of the CoC",
-              checked<dof_detail::run_adi, true>, true, true},
-    DofMethod{"mpad", "multi-pass anisotropic diffusion, explicit steps (seed 000 §5.3.4)",
-              false, false, "O(pixels x max CoC^2 / 8) steps",
-              checked<dof_detail::run_mpad, false>, true, false},
-    DofMethod{"ipf", "Inverse Post Filter scatter, depth test, 8-bit registers (seed 004 §5)",
-              true, false, "O(pixels x min(max |CoC|, 16)^2)",
-              checked<dof_detail::run_ipf, false>, false, false},
-    DofMethod{"scatter", "the slow reference: area-normalised anti-aliased CoC discs, depth layers",
-              true, false, "O(pixels x CoC^2)", checked<dof_detail::run_scatter, false>, true,
-              false},
-    DofMethod{"poisson", "Poisson-disc gather by the own CoC, blurred levels (seed 000 §5.3.3)",
-              false, true, "O(pixels x 13..49 taps) + O(pixels) levels",
-              checked<dof_detail::run_poisson, false>, true, false},
-    DofMethod{"pyramid-layers", "CoC depth layers, quasi-convolution pyramids, over (seed 001 4.5)",
-              true, true, "O(pixels x layers), layers ~ 2 log2(max |CoC|)",
-              checked<dof_detail::run_pyramid_layers, false>, false, false},
-    DofMethod{"sat", "three boxes from a half-resolution summed-area table (seed 003)", false, true,
-              "O(pixels), independent of the CoC", checked<dof_detail::run_sat, false>, true,
-              false},
-    DofMethod{"sat-layers", "near over far summed-area tables normalised by coverage (seed 003)",
-              true, true, "O(pixels), independent of the CoC",
-              checked<dof_detail::run_sat_layers, false>, false, false},
-    DofMethod{"gems", "GPU Gems 3 ch. 28: blend of 3 blur levels, spread near CoC (seed 002)",
-              true, false, "O(pixels x (1 + min(max |CoC|, 512) / 12))",
-              checked<dof_detail::run_gems, false>, false, false},
-    DofMethod{"auto", "the cheapest method whose measured error meets --psnr-budget (auto.hpp)",
-              false, false, "the chosen method's", checked<dof_detail::run_auto, true>, false,
-              false},
+    method<dof_detail::run_adi>(
+        {.name = "adi",
+         .summary = "implicit heat diffusion, one ADI step of tridiagonal solves (seed 000 §3.5)",
+         .blurs_foreground = false,
+         .unbounded_blur = true,
+         .cost = "O(pixels), independent of the CoC",
+         .keeps_sharp = true,
+         .in_place = true}),
+    method<dof_detail::run_mpad>(
+        {.name = "mpad",
+         .summary = "multi-pass anisotropic diffusion, explicit steps (seed 000 §5.3.4)",
+         .blurs_foreground = false,
+         .unbounded_blur = false,
+         .cost = "O(pixels x max CoC^2 / 8) steps",
+         .keeps_sharp = true,
+         .in_place = false}),
+    method<dof_detail::run_ipf>(
+        {.name = "ipf",
+         .summary = "Inverse Post Filter scatter, depth test, 8-bit registers (seed 004 §5)",
+         .blurs_foreground = true,
+         .unbounded_blur = false,
+         .cost = "O(pixels x min(max |CoC|, 16)^2)",
+         .keeps_sharp = false,
+         .in_place = false}),
+    method<dof_detail::run_scatter>(
+        {.name = "scatter",
+         .summary = "the slow reference: area-normalised anti-aliased CoC discs, depth layers",
+         .blurs_foreground = true,
+         .unbounded_blur = false,
+         .cost = "O(pixels x CoC^2)",
+         .keeps_sharp = true,
+         .in_place = false}),
+    method<dof_detail::run_poisson>(
+        {.name = "poisson",
+         .summary = "Poisson-disc gather by the own CoC, blurred levels (seed 000 §5.3.3)",
+         .blurs_foreground = false,
+         .unbounded_blur = true,
+         .cost = "O(pixels x 13..49 taps) + O(pixels) levels",
+         .keeps_sharp = true,
+         .in_place = false}),
+    method<dof_detail::run_pyramid_layers>(
+        {.name = "pyramid-layers",
+         .summary = "CoC depth layers, quasi-convolution pyramids, over (seed 001 4.5)",
+         .blurs_foreground = true,
+         .unbounded_blur = true,
+         .cost = "O(pixels x layers), layers ~ 2 log2(max |CoC|)",
+         .keeps_sharp = false,
+         .in_place = false}),
+    method<dof_detail::run_sat>(
+        {.name = "sat",
+         .summary = "three boxes from a half-resolution summed-area table (seed 003)",
+         .blurs_foreground = false,
+         .unbounded_blur = true,
+         .cost = "O(pixels), independent of the CoC",
+         .keeps_sharp = true,
+         .in_place = false}),
+    method<dof_detail::run_sat_layers>(
+        {.name = "sat-layers",
+         .summary = "near over far summed-area tables normalised by coverage (seed 003)",
+         .blurs_foreground = true,
+         .unbounded_blur = true,
+         .cost = "O(pixels), independent of the CoC",
+         .keeps_sharp = false,
+         .in_place = false}),
+    method<dof_detail::run_gems>(
+        {.name = "gems",
+         .summary = "GPU Gems 3 ch. 28: blend of 3 blur levels, spread near CoC (seed 002)",
+         .blurs_foreground = true,
+         .unbounded_blur = false,
+         .cost = "O(pixels x (1 + min(max |CoC|, 512) / 12))",
+         .keeps_sharp = false,
+         .in_place = false}),
+    method<dof_detail::run_auto>(
+        {.name = "auto",
+         .summary = "the cheapest method whose measured error meets --psnr-budget (auto.hpp)",
+         .blurs_foreground = false,
+         .unbounded_blur = false,
+         .cost = "the chosen method's",
+         .keeps_sharp = false,
+         .in_place = false}),
 };
 
 }  // namespace
@@ -113,7 +178,57 @@ void require_finite(ConstPlane plane, const char* what, int channel) {
       if (!std::isfinite(plane(x, y))) bad_pixel(what, x, y, channel);
 }
 
+const DofMethod& registered_with(DofKernel kernel) {
+  for (const DofMethod& method : kMethods)
+    if (method.kernel == kernel) return method;
+  throw std::logic_error("a DOF method kernel that is not registered");
+}
+
+// The largest |v| of a plane that require_finite has passed.
+float max_abs(ConstPlane plane, int threads) {
+  float largest = 0;
+#pragma omp parallel for num_threads(threads) schedule(static) reduction(max : largest)
+  for (std::ptrdiff_t y = 0; y < plane.height(); ++y) {
+    const float* row = plane.row(y);
+    for (std::ptrdiff_t x = 0; x < plane.width(); ++x) largest = std::max(largest, std::abs(row[x]));
+  }
+  return largest;
+}
+
 }  // namespace
+
+DofFrame::DofFrame(const Image& color, ConstPlane coc, const DofSettings& settings)
+    : color_(&color),
+      coc_(coc),
+      threads_(1),
+      focus_{sharp_below_px(settings.in_focus_coc_px)} {
+  validate_dof_input(color, coc);
+  threads_ = detail::resolve_threads(settings.threads);
+  max_abs_coc_ = max_abs(coc, threads_);
+}
+
+DofFrame::DofFrame(const DofFrame& frame, const Image& color) : DofFrame(frame) {
+  color_ = &color;
+}
+
+const TileMap& DofFrame::tiles() const {
+  if (!tiles_)
+    tiles_ = std::make_shared<const TileMap>(coc_, focus_.sharp_below, TileMap::kDefaultTile, 0,
+                                             threads_);
+  return *tiles_;
+}
+
+namespace dof_detail {
+
+void run_on_frame(const DofMethod& method, Image& out, const DofFrame& frame,
+                  const DofSettings& settings, DofReport& report) {
+  if (method.in_place || &out != &frame.color())
+    return method.kernel(out, frame, settings, report);
+  const Image input = frame.color();
+  method.kernel(out, DofFrame(frame, input), settings, report);
+}
+
+}  // namespace dof_detail
 
 void validate_dof_input(const Image& color, ConstPlane coc) {
   validate_coc(color, coc);

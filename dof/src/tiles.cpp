@@ -13,7 +13,7 @@ namespace {
 int thread_count(int threads) { return detail::resolve_threads(threads); }
 
 // The tile's own statistics from its pixels.
-TileInfo classify(ConstPlane coc, const Rect& area, float in_focus) {
+TileInfo classify(ConstPlane coc, const Rect& area, FocusTest focus) {
   TileInfo info;
   info.min_coc = info.max_coc = coc(area.x, area.y);
   bool near = false, far = false;
@@ -24,7 +24,7 @@ TileInfo classify(ConstPlane coc, const Rect& area, float in_focus) {
       const float c = row[x];
       info.min_coc = std::min(info.min_coc, c);
       info.max_coc = std::max(info.max_coc, c);
-      if (std::abs(c) < in_focus) continue;
+      if (focus.is_sharp(c)) continue;
       x0 = std::min(x0, x);
       x1 = std::max(x1, x);
       y0 = std::min(y0, y);
@@ -58,7 +58,7 @@ TileMap::TileMap(ConstPlane coc, float in_focus_coc_px, std::ptrdiff_t tile,
 #pragma omp parallel for schedule(static) num_threads(thread_count(threads))
   for (std::ptrdiff_t ty = 0; ty < tiles_y_; ++ty)
     for (std::ptrdiff_t tx = 0; tx < tiles_x_; ++tx)
-      info_[std::size_t(ty * tiles_x_ + tx)] = classify(coc, rect(tx, ty), in_focus_);
+      info_[std::size_t(ty * tiles_x_ + tx)] = classify(coc, rect(tx, ty), focus());
 
   // 2. Reach: every tile with a disc stamps its largest radius onto the tiles that its pixels'
   // discs can overlap (its largest extent around the box of its out-of-focus pixels). Clamping

@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "tridiff/dof/method.hpp"
+#include "tridiff/dof/tiles.hpp"
 
 namespace tridiff {
 
@@ -62,6 +63,10 @@ struct MethodChoice {
 // `table`. Methods missing from the table are not considered (the reason names them).
 // InvalidArgument("table") if no registered method has a row.
 MethodChoice choose_dof_method(ConstPlane coc, const DofSettings& settings,
+                               std::span<const MethodTableRow> table);
+// The same from the frame's classification (TileMap::kDefaultTile, no margin, at
+// sharp_below_px(settings.in_focus_coc_px)): what `auto` does with the frame it was given.
+MethodChoice choose_dof_method(const TileMap& tiles, const DofSettings& settings,
                                std::span<const MethodTableRow> table);
 
 }  // namespace tridiff

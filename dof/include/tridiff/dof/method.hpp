@@ -1,6 +1,8 @@
 // Depth-of-field methods and their registry: every method is registered once (name, what it
 // handles, its cost) so that the command line, the tests and the benchmarks enumerate the same
-// list. Adding a method is one new file plus one line in registry.cpp.
+// list. Adding a method is one new file (its DofKernel), one entry in registry.cpp's kMethods
+// (with the kernel's declaration beside the others) and one line in dof/CMakeLists.txt; the
+// registry checks and analyses the frame for it.
 #pragma once
 
 #include <functional>
@@ -42,20 +44,26 @@ struct DofReport {
 using DofRun = void (*)(Image& out, const Image& color, ConstPlane coc, const DofSettings&,
                         DofReport&);
 
+// What a method implements: the same, on a frame that the registry has checked and analysed
+// once (dof/src/frame.hpp, library-internal). `run` builds the frame and calls this.
+class DofFrame;
+using DofKernel = void (*)(Image& out, const DofFrame& frame, const DofSettings&, DofReport&);
+
 struct DofMethod {
   std::string_view name;
   std::string_view summary;
-  bool blurs_foreground;   // the near field's blur spreads over what lies behind it
-                           // (for the diffusion methods: with layers)
-  bool unbounded_blur;     // any CoC at the same cost per pixel
-  std::string_view cost;   // how the work grows
-  DofRun run;
+  bool blurs_foreground = false;  // the near field's blur spreads over what lies behind it
+                                  // (for the diffusion methods: with layers)
+  bool unbounded_blur = false;    // any CoC at the same cost per pixel
+  std::string_view cost;          // how the work grows
+  DofRun run = nullptr;
   // A sharp pixel that the reference leaves unchanged (no nearer blur covers it) keeps its input
   // value bit for bit: the method never blurs what is in focus (tests/dof_quality_test.cpp).
-  bool keeps_sharp;
+  bool keeps_sharp = false;
   // Whether the method works where the image lies when out is color: the pixels it skips
   // (tiles in focus) then cost nothing at all. The others are given a copy of the colour.
-  bool in_place;
+  bool in_place = false;
+  DofKernel kernel = nullptr;
 };
 
 // Every registered method, in a fixed order.
@@ -64,9 +72,9 @@ std::span<const DofMethod> dof_methods();
 const DofMethod& find_dof_method(std::string_view name);
 
 // Checks colour and CoC before a method runs: same size, every value finite (InvalidArgument
-// naming the pixel and channel otherwise). validate_coc checks the sizes and the CoC only,
-// for methods that check the colour as they go (adi checks every pixel it solves or copies);
-// validate_coc_size the sizes alone, for methods that check the CoC as they go too.
+// naming the pixel and channel otherwise). Every registered method's `run` does this once,
+// before the method; validate_coc checks the sizes and the CoC only, validate_coc_size the
+// sizes alone.
 void validate_dof_input(const Image& color, ConstPlane coc);
 void validate_coc(const Image& color, ConstPlane coc);
 void validate_coc_size(const Image& color, ConstPlane coc);

@@ -9,6 +9,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <vector>
 
@@ -39,6 +40,18 @@ struct TileInfo {
 // the setting, but never below one pixel (a disc under one pixel is a point).
 inline float sharp_below_px(float in_focus_coc_px) { return std::max(1.f, in_focus_coc_px); }
 
+// The one definition of "in focus" for every DOF method and the tile classification: a signed
+// CoC c (finite) is sharp when |c| < sharp_below; otherwise it is near (in front of the focus,
+// c <= -sharp_below) or far (c >= sharp_below). The gather and scatter methods and TileMap use
+// sharp_below_px(DofSettings::in_focus_coc_px); the diffusion methods the setting itself (their
+// conductance vanishes continuously, so a sub-pixel threshold means something to them).
+struct FocusTest {
+  float sharp_below = 1.f;
+  bool is_sharp(float c) const { return std::abs(c) < sharp_below; }
+  bool is_near(float c) const { return c <= -sharp_below; }
+  bool is_far(float c) const { return c >= sharp_below; }
+};
+
 class TileMap {
  public:
   static constexpr std::ptrdiff_t kDefaultTile = 32;
@@ -57,6 +70,7 @@ class TileMap {
   std::ptrdiff_t width() const { return width_; }
   std::ptrdiff_t height() const { return height_; }
   float in_focus_coc_px() const { return in_focus_; }
+  FocusTest focus() const { return {in_focus_}; }  // the predicate the tiles were classified by
 
   const TileInfo& at(std::ptrdiff_t tx, std::ptrdiff_t ty) const {
     return info_[std::size_t(ty * tiles_x_ + tx)];
