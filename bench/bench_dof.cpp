@@ -184,11 +184,11 @@ void bm_adi_traffic(benchmark::State& state, std::ptrdiff_t width, std::ptrdiff_
 
 // One untimed-by-the-framework run: its output and its wall time.
 double run_once(const DofMethod& method, const DofScene& s, int threads, Image& out) {
-  DofSettings settings;
+  DofOptions settings;
   settings.threads = threads;
   DofReport report;
   const auto start = std::chrono::steady_clock::now();
-  method.run(out, s.color, s.coc.plane(0), settings, report);
+  report = depth_of_field(out, s.color, s.coc.plane(0), method, settings);
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
@@ -257,7 +257,7 @@ void bm_method(benchmark::State& state, const DofMethod& method, const std::stri
   }
   const CachedScene& cached = scene(name, width, height, focus_percent);
   copy_seconds(width, height, threads);
-  DofSettings settings;
+  DofOptions settings;
   settings.threads = threads;
   Image out(width, height, 3);
   DofReport report;
@@ -265,7 +265,7 @@ void bm_method(benchmark::State& state, const DofMethod& method, const std::stri
   try {
     for (auto _ : state) {
       report = {};
-      method.run(out, cached.scene.color, cached.scene.coc.plane(0), settings, report);
+      report = depth_of_field(out, cached.scene.color, cached.scene.coc.plane(0), method, settings);
       benchmark::ClobberMemory();
     }
   } catch (const std::exception& error) {
@@ -296,13 +296,13 @@ void bm_method(benchmark::State& state, const DofMethod& method, const std::stri
 void bm_in_place(benchmark::State& state, const DofMethod& method, int focus_percent) {
   const CachedScene& cached = scene("focus", kFocusSize, kFocusSize, focus_percent);
   copy_seconds(kFocusSize, kFocusSize, kFocusThreads);
-  DofSettings settings;
+  DofOptions settings;
   settings.threads = kFocusThreads;
   Image image = cached.scene.color;
   DofReport report;
   for (auto _ : state) {
     report = {};
-    method.run(image, image, cached.scene.coc.plane(0), settings, report);
+    report = depth_of_field(image, image, cached.scene.coc.plane(0), method, settings);
     benchmark::ClobberMemory();
   }
   set_counters(state, kFocusSize, kFocusSize, kFocusThreads, report.skipped_fraction);

@@ -81,7 +81,7 @@ TEST(DofAuto, ChoosesTheCheapestMethodWithinTheBudget) {
       row("ipf", "far", false, 4, 0.64, 0.040, 33),
       row("scatter", "far", false, 4, 0.64, 1.0, std::numeric_limits<double>::infinity())};
   const Image coc = far_half_coc();
-  DofSettings settings;
+  DofOptions settings;
   settings.error_budget_psnr = 30;
   MethodChoice choice = choose_dof_method(coc.plane(0), settings, table);
   EXPECT_EQ(choice.method, "ipf");
@@ -102,7 +102,7 @@ TEST(DofAuto, ChoosesTheCheapestMethodWithinTheBudget) {
 TEST(DofAuto, NoMethodWithinBudgetPicksTheMostAccurate) {
   const std::vector<MethodTableRow> table = {row("adi", "far", false, 4, 0.64, 0.01, 25),
                                              row("ipf", "far", false, 4, 0.64, 0.04, 27)};
-  DofSettings settings;
+  DofOptions settings;
   settings.error_budget_psnr = 40;
   const MethodChoice choice = choose_dof_method(far_half_coc().plane(0), settings, table);
   EXPECT_EQ(choice.method, "ipf");
@@ -114,7 +114,7 @@ TEST(DofAuto, CostScalesWithWorkAndForBoundedMethodsWithTheRadiusSquared) {
   // the CoC (unbounded_blur): x 0.64 / 0.16 = 4. ipf's does: x 4 x (4 / 2)^2 = 16.
   const std::vector<MethodTableRow> table = {row("adi", "far", false, 2, 0.16, 0.01, 35),
                                              row("ipf", "far", false, 2, 0.16, 0.01, 35)};
-  DofSettings settings;
+  DofOptions settings;
   const MethodChoice choice = choose_dof_method(far_half_coc().plane(0), settings, table);
   EXPECT_EQ(choice.method, "adi");
   EXPECT_NEAR(choice.predicted_seconds, 0.04, 1e-12);
@@ -126,7 +126,7 @@ TEST(DofAuto, CostScalesWithWorkAndForBoundedMethodsWithTheRadiusSquared) {
 TEST(DofAuto, ChoiceFromTheFrameTilesIsTheChoiceFromTheCoc) {
   const Image coc = far_half_coc();
   for (const double budget : {10.0, 30.0, 60.0}) {
-    DofSettings settings;
+    DofOptions settings;
     settings.error_budget_psnr = budget;
     const TileMap tiles(coc.plane(0), sharp_below_px(settings.in_focus_coc_px));
     const MethodChoice a = choose_dof_method(coc.plane(0), settings, builtin_method_table());
@@ -156,12 +156,12 @@ TEST(DofAuto, RunsTheChosenMethodAndSaysSo) {
   const Image coc = far_half_coc();
   Image out;
   DofReport report;
-  find_dof_method("auto").run(out, color, coc.plane(0), {}, report);
+  report = depth_of_field(out, color, coc.plane(0), find_dof_method("auto"), {});
   ASSERT_FALSE(report.chosen_method.empty());
   EXPECT_NE(report.notes.find("Chose " + report.chosen_method), std::string::npos);
   Image direct;
   DofReport direct_report;
-  find_dof_method(report.chosen_method).run(direct, color, coc.plane(0), {}, direct_report);
+  direct_report = depth_of_field(direct, color, coc.plane(0), find_dof_method(report.chosen_method), {});
   for (int c = 0; c < 3; ++c)
     for (std::ptrdiff_t y = 0; y < 100; ++y)
       for (std::ptrdiff_t x = 0; x < 100; ++x)

@@ -33,9 +33,9 @@ struct Result {
   DofReport report;
 };
 
-Result run(const Image& color, const Image& coc, const DofSettings& settings = {}) {
+Result run(const Image& color, const Image& coc, const DofOptions& settings = {}) {
   Result r;
-  gems().run(r.out, color, coc.plane(0), settings, r.report);
+  r.report = depth_of_field(r.out, color, coc.plane(0), gems(), settings);
   EXPECT_EQ(r.out.width(), color.width());
   EXPECT_EQ(r.out.height(), color.height());
   EXPECT_EQ(r.out.channels(), color.channels());
@@ -227,7 +227,7 @@ TEST(GemsDof, MatchesSeedListingsInDouble) {
     if (k.width * k.height < 8) coc(0, 0, 0) = -k.scale;  // tiny frames: one near pixel
     if (k.far_only)
       coc = make_coc(k.width, k.height, [&](auto x, auto y) { return std::fabs(coc(x, y, 0)); });
-    DofSettings settings;
+    DofOptions settings;
     settings.in_focus_coc_px = k.in_focus;
     const Result r = run(color, coc, settings);
     const Image expected = seed_reference(color, coc, k.in_focus);
@@ -254,7 +254,7 @@ TEST(GemsDof, CloseToScatterOnProceduralScene) {
   Image slow;
   DofReport slow_report;
   t0 = Clock::now();
-  find_dof_method("scatter").run(slow, scene.color, coc.plane(0), {}, slow_report);
+  slow_report = depth_of_field(slow, scene.color, coc.plane(0), find_dof_method("scatter"), {});
   const double slow_s = std::chrono::duration<double>(Clock::now() - t0).count();
   double sum = 0, worst = 0;
   for (int c = 0; c < 3; ++c)
@@ -300,7 +300,7 @@ TEST(GemsDof, CloseToScatterUnderUniformCoc) {
     const Result r = run(color, coc);
     Image slow;
     DofReport report;
-    find_dof_method("scatter").run(slow, color, coc.plane(0), {}, report);
+    report = depth_of_field(slow, color, coc.plane(0), find_dof_method("scatter"), {});
     double sum = 0;
     for (int c = 0; c < 3; ++c)
       for (std::ptrdiff_t y = 0; y < height; ++y)
@@ -347,7 +347,7 @@ TEST(GemsDof, AllSharpReturnsInputBitForBit) {
       {mixed_coc(77, 45, 1e30f), std::numeric_limits<float>::infinity()}};
   for (const Variant& v : variants)
     for (bool skip : {true, false}) {
-      DofSettings settings;
+      DofOptions settings;
       settings.in_focus_coc_px = v.in_focus;
       settings.skip_in_focus = skip;
       const Result r = run(color, v.coc, settings);
@@ -496,7 +496,7 @@ TEST(GemsDof, OutputWithinInputRange) {
 TEST(GemsDof, ThreadCountAndSkippingChangeNoBit) {
   const Image color = random_image(203, 157, 4, 0.f, 3.f, 6);
   const Image coc = mixed_coc(203, 157, 30.f);
-  DofSettings one, two, off;
+  DofOptions one, two, off;
   one.threads = 1;
   two.threads = 2;
   off.skip_in_focus = false;
@@ -514,7 +514,7 @@ TEST(GemsDof, SkipsTilesBeyondNearSpread) {
   const Image coc = make_coc(width, height, [](auto x, auto y) {
     return x >= 40 && x < 70 && y >= 30 && y < 60 ? -12.f : 0.f;
   });
-  DofSettings off;
+  DofOptions off;
   off.skip_in_focus = false;
   const Result a = run(color, coc), b = run(color, coc, off);
   EXPECT_EQ(differing_bits(a.out, b.out), 0);

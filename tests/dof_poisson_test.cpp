@@ -29,10 +29,10 @@ const DofMethod& poisson() { return find_dof_method("poisson"); }
 const DofMethod& scatter() { return find_dof_method("scatter"); }
 
 Image run(const DofMethod& method, const Image& color, const Image& coc,
-          const DofSettings& settings = {}, DofReport* report = nullptr) {
+          const DofOptions& settings = {}, DofReport* report = nullptr) {
   Image out;
   DofReport local;
-  method.run(out, color, coc.plane(0), settings, report ? *report : local);
+  (report ? *report : local) = depth_of_field(out, color, coc.plane(0), method, settings);
   return out;
 }
 
@@ -57,7 +57,7 @@ TEST(DofPoisson, AllSharpReturnsInputBitForBit) {
         const Image color = random_image(w, h, 3, -1.f, 3.f, 5);
         const float limit = 0.999f * threshold;
         const Image coc = random_coc(w, h, -limit, limit, 6);
-        DofSettings settings;
+        DofOptions settings;
         settings.skip_in_focus = skip;
         settings.in_focus_coc_px = threshold;
         const Image out = run(poisson(), color, coc, settings);
@@ -79,7 +79,7 @@ TEST(DofPoisson, SharpPixelsKeepTheirValuesNextToBlur) {
     return std::fabs(v) < 6.f ? 0.1f * v : v;
   });
   for (bool skip : {true, false}) {
-    DofSettings settings;
+    DofOptions settings;
     settings.skip_in_focus = skip;
     const Image out = run(poisson(), color, coc, settings);
     const FocusChanges f = focus_changes(out, color, coc);
@@ -280,7 +280,7 @@ TEST(DofPoisson, IndependentOfThreadCount) {
   const Image coc = make_coc(w, h, [](auto x, auto y) {
     return 30.f * std::sin(float(x) / 11.f) * std::cos(float(y) / 9.f);
   });
-  DofSettings one, two;
+  DofOptions one, two;
   one.threads = 1;
   two.threads = 2;
   const Image a = run(poisson(), color, coc, one), b = run(poisson(), color, coc, two);

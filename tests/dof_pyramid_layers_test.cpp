@@ -30,10 +30,10 @@ struct Result {
   DofReport report;
 };
 
-Result run(const Image& color, const Image& coc, const DofSettings& settings = {},
+Result run(const Image& color, const Image& coc, const DofOptions& settings = {},
            const DofMethod& m = method()) {
   Result r;
-  m.run(r.out, color, coc.plane(0), settings, r.report);
+  r.report = depth_of_field(r.out, color, coc.plane(0), m, settings);
   EXPECT_EQ(r.out.width(), color.width());
   EXPECT_EQ(r.out.height(), color.height());
   EXPECT_EQ(r.out.channels(), color.channels());
@@ -68,7 +68,7 @@ TEST(PyramidLayers, AllSharpReturnsInputBitForBit) {
         const Image coc = make_coc(w, h, [&](auto x, auto y) {
           return 0.99f * threshold * std::sin(float(3 * x + 7 * y));
         });
-        DofSettings settings;
+        DofOptions settings;
         settings.in_focus_coc_px = threshold;
         settings.skip_in_focus = skip;
         const Result r = run(color, coc, settings);
@@ -207,7 +207,7 @@ TEST(PyramidLayers, SharpPixelsInFrontOfFarBlurUnchanged) {
     return dx * dx + dy * dy < 900.f ? 0.2f : 4.f + 0.15f * float(x);  // far CoC 4 ... 26
   });
   for (bool skip : {true, false}) {
-    DofSettings settings;
+    DofOptions settings;
     settings.skip_in_focus = skip;
     const Result r = run(color, coc, settings);
     EXPECT_FALSE(r.report.layered);
@@ -265,7 +265,7 @@ TEST(PyramidLayers, SkipMatchesNoSkipBitForBit) {
     if (x >= 200 && x < 240 && y >= 150 && y < 200) return 3.f + 0.2f * float(y - 150);
     return 0.4f;
   });
-  DofSettings on, off;
+  DofOptions on, off;
   off.skip_in_focus = false;
   const Result a = run(color, coc, on), b = run(color, coc, off);
   EXPECT_EQ(differing_bits(a.out, b.out), 0);
@@ -319,7 +319,7 @@ TEST(PyramidLayers, ThreadCountDoesNotChangeBits) {
   const std::ptrdiff_t w = 211, h = 133;
   const Image color = random_image(w, h, 3, 0.f, 2.f, 17);
   const Image coc = mixed_coc(w, h);
-  DofSettings one, two;
+  DofOptions one, two;
   one.threads = 1;
   two.threads = 2;
   EXPECT_EQ(differing_bits(run(color, coc, one).out, run(color, coc, two).out), 0);

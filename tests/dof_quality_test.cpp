@@ -29,11 +29,11 @@ using namespace tridiff::testing_util;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
 Image run(const DofMethod& method, const Image& color, ConstPlane coc, int threads = 2) {
-  DofSettings settings;
+  DofOptions settings;
   settings.threads = threads;
   DofReport report;
   Image out;
-  method.run(out, color, coc, settings, report);
+  report = depth_of_field(out, color, coc, method, settings);
   return out;
 }
 

@@ -26,10 +26,10 @@ using namespace tridiff::testing_util;
 
 const DofMethod& scatter() { return find_dof_method("scatter"); }
 
-Image run(const Image& color, const Image& coc, const DofSettings& settings = {}) {
+Image run(const Image& color, const Image& coc, const DofOptions& settings = {}) {
   Image out;
   DofReport report;
-  scatter().run(out, color, coc.plane(0), settings, report);
+  report = depth_of_field(out, color, coc.plane(0), scatter(), settings);
   EXPECT_EQ(out.width(), color.width());
   EXPECT_EQ(out.height(), color.height());
   EXPECT_EQ(out.channels(), color.channels());
@@ -69,7 +69,7 @@ TEST(ScatterReference, UniformCocConservesEnergyPerChannel) {
     const Image coc = make_coc(width, height, [&](auto, auto) { return d; });
     for (bool skip : {true, false}) {
       if (!skip && std::fabs(d) > 20.f) continue;  // the large discs once: they cost the most
-      DofSettings settings;
+      DofOptions settings;
       settings.skip_in_focus = skip;
       const Image out = run(color, coc, settings);
       for (int c = 0; c < 3; ++c) {
@@ -154,7 +154,7 @@ TEST(ScatterReference, InFocusEverywhereIsIdentity) {
     std::uniform_real_distribution<float> dist(-v.limit, v.limit);
     const Image coc = make_coc(width, height, [&](auto, auto) { return dist(rng); });
     for (bool skip : {true, false}) {
-      DofSettings settings;
+      DofOptions settings;
       settings.skip_in_focus = skip;
       settings.in_focus_coc_px = v.threshold;
       const Image out = run(color, coc, settings);
@@ -181,7 +181,7 @@ TEST(ScatterReference, SharpNearObjectStaysSharpOverBlurredBackground) {
     const Image coc =
         make_coc(size, size, [&](auto x, auto y) { return object(x, y) ? object_coc : 14.f; });
     for (bool skip : {true, false}) {
-      DofSettings settings;
+      DofOptions settings;
       settings.skip_in_focus = skip;
       const Image out = run(color, coc, settings);
       std::ptrdiff_t object_moved = 0, background_moved = 0, background = 0;
@@ -261,11 +261,11 @@ TEST(ScatterReference, ThreadCountDoesNotChangeABit) {
   const std::ptrdiff_t width = 110, height = 83;
   const Image color = random_image(width, height, 3, 0.f, 4.f, 31);
   const Image coc = mixed_coc(width, height);
-  DofSettings one;
+  DofOptions one;
   one.threads = 1;
   const Image reference = run(color, coc, one);
   for (int threads : {2, 3}) {
-    DofSettings settings;
+    DofOptions settings;
     settings.threads = threads;
     const Image out = run(color, coc, settings);
     std::ptrdiff_t differ = 0;
@@ -283,7 +283,7 @@ TEST(ScatterReference, BadInputIsRejected) {
   DofReport report;
   const Image small(19, 12, 1);
   EXPECT_EQ(
-      invalid_argument_of([&] { scatter().run(out, color, small.plane(0), {}, report); }).argument,
+      invalid_argument_of([&] { depth_of_field(out, color, small.plane(0), scatter(), {}); }).argument,
       "coc");
   Image coc = make_coc(20, 12, [](auto, auto) { return 5.f; });
   coc(4, 9, 0) = std::numeric_limits<float>::quiet_NaN();
@@ -301,7 +301,7 @@ TEST(ScatterReference, BadInputIsRejected) {
   const Thrown too_large = invalid_argument_of([&] { run(color, huge); });
   EXPECT_EQ(too_large.argument, "coc");
   EXPECT_TRUE(contains(too_large.message, "pixel (2, 1)"));
-  DofSettings negative;
+  DofOptions negative;
   negative.threads = -1;
   EXPECT_EQ(invalid_argument_of([&] { run(color, good_coc, negative); }).argument, "threads");
 }

@@ -34,9 +34,9 @@ struct Result {
 };
 
 Result run(const char* name, const Image& color, const Image& coc,
-           const DofSettings& settings = {}) {
+           const DofOptions& settings = {}) {
   Result r;
-  find_dof_method(name).run(r.out, color, coc.plane(0), settings, r.report);
+  r.report = depth_of_field(r.out, color, coc.plane(0), find_dof_method(name), settings);
   EXPECT_EQ(r.out.width(), color.width());
   EXPECT_EQ(r.out.height(), color.height());
   EXPECT_EQ(r.out.channels(), color.channels());
@@ -246,7 +246,7 @@ TEST(SatDof, InFocusEverywhereIsIdentity) {
     const Image coc = make_coc(width, height, [&](auto, auto) { return dist(rng); });
     for (const char* name : kMethods)
       for (bool skip : {true, false}) {
-        DofSettings settings;
+        DofOptions settings;
         settings.skip_in_focus = skip;
         settings.in_focus_coc_px = v.threshold;
         const Result r = run(name, color, coc, settings);
@@ -345,7 +345,7 @@ TEST(SatDof, ThreadsAndSkippingChangeNoBit) {
                                  [&](auto x, auto y) { return near_disc(x, y) ? -13.f : 0.f; })};
   for (const Image& coc : cocs)
     for (const char* name : kMethods) {
-      DofSettings one, two, no_skip;
+      DofOptions one, two, no_skip;
       one.threads = 1;
       two.threads = 2;
       no_skip.threads = 2;
@@ -473,7 +473,7 @@ TEST(SatDof, NearObjectHidesSmallBlurBehindIt) {
   // Reference: the scatter shows no green there either.
   Image reference;
   DofReport report;
-  find_dof_method("scatter").run(reference, color, coc.plane(0), {}, report);
+  report = depth_of_field(reference, color, coc.plane(0), find_dof_method("scatter"), {});
   double scatter_green = 0;
   for (std::ptrdiff_t y = 56; y < 72; ++y)
     for (std::ptrdiff_t x = s0 + 3; x < s0 + 8; ++x)
@@ -494,7 +494,7 @@ TEST(SatDof, ErrorAgainstScatterOnProceduralScene) {
   coc_thin_lens(coc.plane(0), scene.depth.plane(0), scene.lens, 2);
   using Clock = std::chrono::steady_clock;
   auto timed = [&](const char* name, double& seconds) {
-    DofSettings settings;
+    DofOptions settings;
     settings.threads = 2;
     const auto start = Clock::now();
     Result r = run(name, scene.color, coc, settings);

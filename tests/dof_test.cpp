@@ -34,9 +34,9 @@ struct Result {
 };
 
 Result run(const DofMethod& method, const Image& color, const Image& coc,
-           const DofSettings& settings = {}) {
+           const DofOptions& settings = {}) {
   Result r;
-  method.run(r.out, color, coc.plane(0), settings, r.report);
+  r.report = depth_of_field(r.out, color, coc.plane(0), method, settings);
   return r;
 }
 
@@ -436,7 +436,7 @@ TEST(DofMethods, DofInFocusPixelsUnchanged) {
     };
     for (const DofMethod& method : diffusion_methods())
       for (bool skip : {true, false}) {
-        DofSettings settings;
+        DofOptions settings;
         settings.skip_in_focus = skip;
         settings.in_focus_coc_px = v.threshold;
         const Result r = run(method, c.color, c.coc, settings);
@@ -486,7 +486,7 @@ TEST(DofMethods, DofSkipMatchesNoSkip) {
     return (x >= 68 && x < 124 && y >= 70 && y < 126) ? 14.f : 0.f;
   });
   for (const DofMethod& method : dof_methods()) {
-    DofSettings on, off;
+    DofOptions on, off;
     on.skip_in_focus = true;
     off.skip_in_focus = false;
     const Result a = run(method, color, coc, on), b = run(method, color, coc, off);
@@ -521,12 +521,12 @@ TEST(DofMethods, InPlaceGivesTheSeparateOutput) {
   });
   for (const DofMethod& method : dof_methods())
     for (bool layers : {false, true}) {
-      DofSettings settings;
+      DofOptions settings;
       settings.layers = layers;
       const Result separate = run(method, color, coc, settings);
       Image image = color;
       DofReport report;
-      method.run(image, image, coc.plane(0), settings, report);
+      report = depth_of_field(image, image, coc.plane(0), method, settings);
       const std::string where = std::string(method.name) + (layers ? " layered" : "");
       ASSERT_EQ(image.width(), width) << where;
       ASSERT_EQ(image.channels(), 3) << where;
@@ -596,7 +596,7 @@ TEST(DofMethods, EdgeSizesKeepRangeAndMass) {
           const int band = int((x + 2 * y) % 3);
           return band == 0 ? -30.f : band == 1 ? 0.f : 12.f;
         });
-        DofSettings settings;
+        DofOptions settings;
         settings.layers = layers;
         const Result r = run(method, c.color, c.coc, settings);
         for (int ch = 0; ch < 3; ++ch) {
@@ -727,7 +727,7 @@ TEST(DofLayers, LayersRemoveBlockingArtifact) {
   const Case c = blocking_case();
   const float d = std::fabs(kForegroundCoc);
   for (const DofMethod& method : diffusion_methods()) {
-    DofSettings settings;
+    DofOptions settings;
     settings.layers = true;
     const Result r = run(method, c.color, c.coc, settings);
     EXPECT_TRUE(r.report.layered) << method.name;
@@ -785,7 +785,7 @@ TEST(DofLayers, LayeredOutputFiniteAndWithinInputRange) {
   Case cases[] = {blocking_case(), mixed_case()};
   for (Case& c : cases)
     for (const DofMethod& method : diffusion_methods()) {
-      DofSettings settings;
+      DofOptions settings;
       settings.layers = true;
       const Result r = run(method, c.color, c.coc, settings);
       EXPECT_TRUE(r.report.layered) << method.name;
@@ -819,7 +819,7 @@ TEST(DofLayers, NoNearFieldMeansNoLayering) {
   const Image far_coc =
       make_coc(kLayerSize, kLayerSize, [&](auto x, auto y) { return std::fabs(c.coc(x, y, 0)); });
   for (const DofMethod& method : dof_methods()) {
-    DofSettings layered;
+    DofOptions layered;
     layered.layers = true;
     const Result a = run(method, c.color, far_coc, layered), b = run(method, c.color, far_coc);
     EXPECT_FALSE(a.report.layered);
@@ -844,7 +844,7 @@ TEST(DofInput, NanColourNamesThePixel) {
   EXPECT_TRUE(contains(v.message, "channel 1"));
   for (const DofMethod& method : dof_methods())
     for (bool layers : {false, true}) {
-      DofSettings settings;
+      DofOptions settings;
       settings.layers = layers;
       const Thrown t = invalid_argument_of([&] { run(method, color, coc, settings); });
       EXPECT_TRUE(contains(t.message, "pixel (17, 23)")) << method.name;
@@ -859,7 +859,7 @@ TEST(DofInput, EveryMethodNamesANonFiniteColourAsTheColour) {
   color(17, 23, 1) = kNaN;
   for (const DofMethod& method : dof_methods())
     for (bool layers : {false, true}) {
-      DofSettings settings;
+      DofOptions settings;
       settings.layers = layers;
       const Thrown t = invalid_argument_of([&] { run(method, color, coc, settings); });
       EXPECT_EQ(t.argument, "color") << method.name;
@@ -875,7 +875,7 @@ TEST(DofInput, DiffusionNamesTheCocWhoseConductanceOverflows) {
   coc(66, 38, 0) = -1e20f;
   for (const char* name : {"adi", "mpad", "auto"})
     for (bool layers : {false, true}) {
-      DofSettings settings;
+      DofOptions settings;
       settings.layers = layers;
       const Thrown t = invalid_argument_of([&] { run(find_dof_method(name), color, coc, settings); });
       EXPECT_EQ(t.argument, "coc") << name;
@@ -892,7 +892,7 @@ TEST(DofInput, RefusedInputLeavesTheOutputUntouched) {
   for (const DofMethod& method : dof_methods()) {
     Image out = before;
     DofReport report;
-    EXPECT_THROW(method.run(out, color, coc.plane(0), {}, report), InvalidArgument) << method.name;
+    EXPECT_THROW(depth_of_field(out, color, coc.plane(0), method, {}), InvalidArgument) << method.name;
     std::ptrdiff_t changed = 0;
     for (int ch = 0; ch < 3; ++ch)
       for (std::ptrdiff_t y = 0; y < 30; ++y)
@@ -940,7 +940,7 @@ TEST(DofInput, CocOfWrongSizeRejected) {
       Image out;
       DofReport report;
       EXPECT_EQ(
-          invalid_argument_of([&] { method.run(out, color, coc.plane(0), {}, report); }).argument,
+          invalid_argument_of([&] { depth_of_field(out, color, coc.plane(0), method, {}); }).argument,
           "coc")
           << method.name;
     }
@@ -956,7 +956,7 @@ TEST(DofInput, CocInsideTheOutputRejected) {
       for (std::ptrdiff_t x = 0; x < 40; ++x) out(x, y, 3) = 4.f;
     DofReport report;
     const Thrown t =
-        invalid_argument_of([&] { method.run(out, color, out.plane(3), {}, report); });
+        invalid_argument_of([&] { depth_of_field(out, color, out.plane(3), method, {}); });
     EXPECT_EQ(t.argument, "coc") << method.name;
     EXPECT_TRUE(contains(t.message, "output")) << method.name;
   }

@@ -99,8 +99,8 @@ TEST(DofTiles, UnreachedTilesAreWhatTheScatterReferenceLeavesUntouched) {
   const Image coc = sparse_coc(120, 90, 30.f, 11);
   Image out;
   DofReport report;
-  DofSettings settings;
-  find_dof_method("scatter").run(out, color, coc.plane(0), settings, report);
+  DofOptions settings;
+  report = depth_of_field(out, color, coc.plane(0), find_dof_method("scatter"), settings);
   const TileMap tiles(coc.plane(0), settings.in_focus_coc_px, 16);
   ASSERT_GT(tiles.work_fraction(), 0.0);
   ASSERT_LT(tiles.work_fraction(), 1.0);

@@ -312,7 +312,7 @@ TEST(IpfModel, RegisteredMethodIsTheModelWithCocAsDepth) {
   const DofCase c = random_dof_case(40, 30, 9);
   Image method_out;
   DofReport report;
-  find_dof_method("ipf").run(method_out, c.color, c.coc.plane(0), {}, report);
+  report = depth_of_field(method_out, c.color, c.coc.plane(0), find_dof_method("ipf"), {});
   Image model;
   run_dof_model(model, c.color, c.coc.plane(0), c.coc.plane(0), DofProgram{}, {4, 0, 1});
   EXPECT_EQ(differing_codes(model, method_out), 0);

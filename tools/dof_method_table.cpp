@@ -31,13 +31,13 @@ namespace {
 
 using namespace tridiff;
 
-double run_seconds(const DofMethod& method, const DofScene& scene, const DofSettings& settings,
+double run_seconds(const DofMethod& method, const DofScene& scene, const DofOptions& settings,
                    Image& out) {
   double best = 1e300;
   for (int run = 0; run < 3; ++run) {
     DofReport report;
     const auto start = std::chrono::steady_clock::now();
-    method.run(out, scene.color, scene.coc.plane(0), settings, report);
+    report = depth_of_field(out, scene.color, scene.coc.plane(0), method, settings);
     const double s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     best = std::min(best, s);
@@ -129,7 +129,7 @@ int measure(int argc, char** argv) {
            (only.empty() || std::find(only.begin(), only.end(), name) != only.end());
   };
 
-  DofSettings settings;
+  DofOptions settings;
   settings.threads = threads;
   std::vector<MethodTableRow> rows;
   for (const DofSceneInfo& info : dof_scenes()) {
@@ -138,7 +138,7 @@ int measure(int argc, char** argv) {
                         threads);
     Image reference;
     DofReport report;
-    find_dof_method("scatter").run(reference, scene.color, scene.coc.plane(0), settings, report);
+    report = depth_of_field(reference, scene.color, scene.coc.plane(0), find_dof_method("scatter"), settings);
     for (const DofMethod& method : dof_methods()) {
       if (!measured_here(method.name)) continue;
       Image out;

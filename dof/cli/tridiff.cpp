@@ -137,7 +137,7 @@ struct DofPlan {
   int threads = 0;
   const DofMethod* method = nullptr;
   std::string output, coc_output;  // coc_output empty: not written
-  DofSettings settings;
+  DofOptions settings;
   OutputFiles files;
 };
 
@@ -180,7 +180,7 @@ int run_dof(const cli::Arguments& args) {
   const std::string& source = frame.source;
   const double load_seconds = frame.load_seconds, coc_seconds = frame.coc_seconds;
 
-  DofSettings settings = plan.settings;
+  DofOptions settings = plan.settings;
   settings.progress = progress_bar();
   DofReport report;
   // A method that works in place (adi) blurs the frame where it lies: the tiles in focus are
@@ -189,7 +189,7 @@ int run_dof(const cli::Arguments& args) {
   Image separate_result;
   Image& result = in_place ? frame.color : separate_result;
   const auto method_start = std::chrono::steady_clock::now();
-  cli::with_coc_named(args, [&] { method.run(result, color, coc.plane(0), settings, report); });
+  cli::with_coc_named(args, [&] { report = depth_of_field(result, color, coc.plane(0), method, settings); });
   const double method_seconds = seconds(method_start);
 
   const auto write_start = std::chrono::steady_clock::now();

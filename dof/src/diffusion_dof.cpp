@@ -7,7 +7,7 @@
 #include <cmath>
 #include <string>
 
-#include "tridiff/solvers/solve.hpp"
+#include "tridiff/threads.hpp"
 #include "frame.hpp"
 #include "stage_clock.hpp"
 
@@ -59,14 +59,14 @@ bool has_near_blur(ConstPlane coc, float in_focus_px) {
 // Runs row(y) for every row, on `threads` threads.
 template <class Row>
 void for_each_row(std::ptrdiff_t height, int threads, Row&& row) {
-#pragma omp parallel for num_threads(detail::resolve_threads(threads)) schedule(static)
+#pragma omp parallel for num_threads(resolve_threads(threads)) schedule(static)
   for (std::ptrdiff_t y = 0; y < height; ++y) row(y);
 }
 
 // The layers are filled, blurred and composited in place in four buffers: a fresh full-frame
 // image costs its page faults (with the ten buffers of the first version, the layers of the
 // built-in scene at 1920 x 1080 on a 2-core VM took 268-584 ms, now typically 56).
-void layered_dof(Image& out, const DofFrame& frame, const DofSettings& settings,
+void layered_dof(Image& out, const DofFrame& frame, const DofOptions& settings,
                  DofReport& report, const Diffuser& diffuse, const DiffusionOptions& options) {
   const Image& color = frame.color();
   const ConstPlane coc = frame.coc();
@@ -176,8 +176,7 @@ void require_finite_conductance(const DofFrame& frame, float in_focus_px) {
     for (std::ptrdiff_t x = 0; x < coc.width(); ++x) {
       const float k = conductance(coc(x, y));
       if (!std::isfinite(k))
-        throw InvalidArgument("coc", -1, -1,
-                              "pixel (" + std::to_string(x) + ", " + std::to_string(y) +
+        throw InvalidArgument("coc", "pixel (" + std::to_string(x) + ", " + std::to_string(y) +
                                   "): " + std::to_string(coc(x, y)) + " maps to conductance " +
                                   std::to_string(k) + "; it must be finite and >= 0");
     }
@@ -189,7 +188,7 @@ LinkField coc_links(ConstPlane coc, float in_focus_px, int threads) {
   return links_from_pixels(coc, CocConductance{in_focus_px}, threads);
 }
 
-void diffusion_dof(Image& out, const DofFrame& frame, const DofSettings& settings,
+void diffusion_dof(Image& out, const DofFrame& frame, const DofOptions& settings,
                    DofReport& report, const Diffuser& diffuse) {
   require_finite_conductance(frame, settings.in_focus_coc_px);
   DiffusionOptions options;

@@ -14,7 +14,7 @@ class DofFrame {
  public:
   // Checks that `coc` has the colour's size and that every value of both is finite
   // (InvalidArgument naming "coc" or "color", the pixel and the channel). Both are borrowed.
-  DofFrame(const Image& color, ConstPlane coc, const DofSettings& settings);
+  DofFrame(const Image& color, ConstPlane coc, const DofOptions& settings);
   // The same analysis over `color`, a copy of frame.color() (same size and values).
   DofFrame(const DofFrame& frame, const Image& color);
 
@@ -23,11 +23,11 @@ class DofFrame {
   std::ptrdiff_t width() const { return color_->width(); }
   std::ptrdiff_t height() const { return color_->height(); }
   int channels() const { return color_->channels(); }
-  // DofSettings::threads resolved: at least 1.
+  // DofOptions::threads resolved: at least 1.
   int threads() const { return threads_; }
 
   // Sharp or out of focus for the gather and scatter methods and the tiles below:
-  // sharp_below_px(DofSettings::in_focus_coc_px).
+  // sharp_below_px(DofOptions::in_focus_coc_px).
   FocusTest focus() const { return focus_; }
   float sharp_below() const { return focus_.sharp_below; }
   // The largest |c| of the frame, sharp pixels included.
@@ -56,7 +56,7 @@ namespace dof_detail {
 // `auto` does with the method it chose. A method that cannot work in place is given a copy of
 // the colour when out is the colour.
 void run_on_frame(const DofMethod& method, Image& out, const DofFrame& frame,
-                  const DofSettings& settings, DofReport& report);
+                  const DofOptions& settings, DofReport& report);
 
 }  // namespace dof_detail
 }  // namespace tridiff

@@ -12,18 +12,18 @@ namespace {
 
 void require_positive(float value, const char* name) {
   if (!(value > 0) || !std::isfinite(value))
-    throw InvalidArgument(name, -1, -1, "must be finite and > 0, got " + std::to_string(value));
+    throw InvalidArgument(name, "must be finite and > 0, got " + std::to_string(value));
 }
 
 void require_non_negative(float value, const char* name) {
   if (!(value >= 0) || !std::isfinite(value))
-    throw InvalidArgument(name, -1, -1, "must be finite and >= 0, got " + std::to_string(value));
+    throw InvalidArgument(name, "must be finite and >= 0, got " + std::to_string(value));
 }
 
 template <class Model>
 void coc_map(Plane coc, ConstPlane depth, int threads, Model model) {
   if (coc.width() != depth.width() || coc.height() != depth.height())
-    throw InvalidArgument("coc", -1, -1, "size differs from the depth map");
+    throw InvalidArgument("coc", "size differs from the depth map");
   const int team = resolve_threads(threads);
 #pragma omp parallel for num_threads(team) schedule(static)
   for (std::ptrdiff_t y = 0; y < depth.height(); ++y) {
@@ -48,8 +48,7 @@ void validate(const ThinLens& lens) {
   require_non_negative(lens.max_coc_px, "max_coc");
   require_positive(lens.focus_distance_m, "focus");
   if (lens.focus_distance_m * 1000.f <= lens.focal_length_mm)
-    throw InvalidArgument("focus", -1, -1,
-                          "the focus distance " + std::to_string(lens.focus_distance_m) +
+    throw InvalidArgument("focus", "the focus distance " + std::to_string(lens.focus_distance_m) +
                               " m must exceed the focal length (" +
                               std::to_string(lens.focal_length_mm) + " mm)");
 }
@@ -64,19 +63,17 @@ void validate(const ArtistCurve& curve) {
   // A region with a radius must have a ramp: an empty or reversed one would blur nothing,
   // silently. A radius of 0 is how a region is turned off.
   if (curve.near_radius_px > 0 && !(curve.near_end_m > curve.near_start_m))
-    throw InvalidArgument("near_end", -1, -1,
-                          "must be beyond near_start (" + std::to_string(curve.near_start_m) +
+    throw InvalidArgument("near_end", "must be beyond near_start (" + std::to_string(curve.near_start_m) +
                               " m) when near_radius is > 0, got " +
                               std::to_string(curve.near_end_m) + " m");
   if (curve.far_radius_px > 0 && !(curve.far_end_m > curve.far_start_m))
-    throw InvalidArgument("far_end", -1, -1,
-                          "must be beyond far_start (" + std::to_string(curve.far_start_m) +
+    throw InvalidArgument("far_end", "must be beyond far_start (" + std::to_string(curve.far_start_m) +
                               " m) when far_radius is > 0, got " +
                               std::to_string(curve.far_end_m) + " m");
   const bool near = curve.near_radius_px > 0;
   const bool far = curve.far_radius_px > 0;
   if (near && far && curve.far_start_m < curve.near_end_m)
-    throw InvalidArgument("far_start", -1, -1, "the far region must start at or after near_end");
+    throw InvalidArgument("far_start", "the far region must start at or after near_end");
 }
 
 namespace {

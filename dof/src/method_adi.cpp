@@ -5,7 +5,7 @@
 
 namespace tridiff::dof_detail {
 
-void run_adi(Image& out, const DofFrame& frame, const DofSettings& settings, DofReport& report) {
+void run_adi(Image& out, const DofFrame& frame, const DofOptions& settings, DofReport& report) {
   diffusion_dof(out, frame, settings, report,
                 [](Image& dst, const Image& src, ConstPlane coc, float in_focus_px,
                    const DiffusionOptions& options) {

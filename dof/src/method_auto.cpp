@@ -164,14 +164,14 @@ std::string describe(const Candidate& c) {
 
 }  // namespace
 
-MethodChoice choose_dof_method(ConstPlane coc, const DofSettings& settings,
+MethodChoice choose_dof_method(ConstPlane coc, const DofOptions& settings,
                                std::span<const MethodTableRow> table) {
   const TileMap tiles(coc, sharp_below_px(settings.in_focus_coc_px), TileMap::kDefaultTile, 0,
                       settings.threads);
   return choose_dof_method(tiles, settings, table);
 }
 
-MethodChoice choose_dof_method(const TileMap& tiles, const DofSettings& settings,
+MethodChoice choose_dof_method(const TileMap& tiles, const DofOptions& settings,
                                std::span<const MethodTableRow> table) {
   std::vector<Candidate> candidates;
   std::string missing;
@@ -183,7 +183,7 @@ MethodChoice choose_dof_method(const TileMap& tiles, const DofSettings& settings
     else
       missing += (missing.empty() ? "" : ", ") + std::string(method.name);
   }
-  if (candidates.empty()) throw InvalidArgument("table", -1, -1, "has no row for any method");
+  if (candidates.empty()) throw InvalidArgument("table", "has no row for any method");
   std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
     return a.predicted_seconds < b.predicted_seconds;
   });
@@ -217,7 +217,7 @@ namespace dof_detail {
 
 // The frame is checked and classified once (DofFrame): the choice reads its tiles, and the
 // chosen method is run on the same frame.
-void run_auto(Image& out, const DofFrame& frame, const DofSettings& settings, DofReport& report) {
+void run_auto(Image& out, const DofFrame& frame, const DofOptions& settings, DofReport& report) {
   const auto start = StageClock::now();
   const MethodChoice choice = choose_dof_method(frame.tiles(), settings, builtin_method_table());
   const double choose_seconds = seconds_since(start);

@@ -83,7 +83,7 @@
 #include "tridiff/blur/kernels.hpp"
 #include "tridiff/dof/method.hpp"
 #include "tridiff/dof/tiles.hpp"
-#include "tridiff/solvers/solve.hpp"
+#include "tridiff/threads.hpp"
 #include "stage_clock.hpp"
 #include "frame.hpp"
 #include "tiled_gather.hpp"
@@ -441,7 +441,7 @@ std::string describe(const Plan& plan) {
 
 namespace dof_detail {
 
-void run_gems(Image& out, const DofFrame& frame, const DofSettings& settings, DofReport& report) {
+void run_gems(Image& out, const DofFrame& frame, const DofOptions& settings, DofReport& report) {
   const Image& color = frame.color();
   Stages stages(report);
   out.reset(color.width(), color.height(), color.channels());

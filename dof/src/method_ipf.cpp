@@ -8,7 +8,7 @@
 
 #include "tridiff/dof/ipf.hpp"
 #include "tridiff/dof/method.hpp"
-#include "tridiff/solvers/solve.hpp"
+#include "tridiff/threads.hpp"
 #include "stage_clock.hpp"
 #include "frame.hpp"
 
@@ -20,8 +20,7 @@ namespace {
 // The mask's size: odd, in [3, kMaxMask].
 void require_mask(int size) {
   if (size < 3 || size % 2 == 0 || size > kMaxMask)
-    throw InvalidArgument("mask", -1, -1,
-                          "must be odd and in [3, " + std::to_string(kMaxMask) +
+    throw InvalidArgument("mask", "must be odd and in [3, " + std::to_string(kMaxMask) +
                               "] (fig. 10's 8-bit Radius reaches 255 pixels), got " +
                               std::to_string(size));
 }
@@ -31,15 +30,13 @@ void require_mask(int size) {
 void validate(const DofProgram& program) {
   require_mask(program.mask);
   if (!(program.in_focus_coc_px >= 0.f) || !std::isfinite(program.in_focus_coc_px))
-    throw InvalidArgument("in_focus_coc_px", -1, -1, "must be finite and >= 0");
+    throw InvalidArgument("in_focus_coc_px", "must be finite and >= 0");
   if (program.area_weight_bits < 1 || program.area_weight_bits > 16)
-    throw InvalidArgument("area_weight_bits", -1, -1,
-                          "must be in [1, 16], got " + std::to_string(program.area_weight_bits));
+    throw InvalidArgument("area_weight_bits", "must be in [1, 16], got " + std::to_string(program.area_weight_bits));
   // At least as wide as one weight; at most 20 so that Color (8 more) stays in 32 bits.
   if (program.color_weight_bits < program.area_weight_bits || program.color_weight_bits > 20)
     throw InvalidArgument(
-        "color_weight_bits", -1, -1,
-        "must be in [area_weight_bits, 20], got " + std::to_string(program.color_weight_bits));
+        "color_weight_bits", "must be in [area_weight_bits, 20], got " + std::to_string(program.color_weight_bits));
 }
 
 std::int32_t disc_pixels(int radius) {
@@ -89,12 +86,11 @@ MaskKernel laplacian_kernel(int size) {
 void validate(const MaskKernel& kernel) {
   require_mask(kernel.size);
   if (kernel.weights.size() != std::size_t(kernel.size) * kernel.size)
-    throw InvalidArgument("weights", -1, -1, "must hold mask x mask values");
+    throw InvalidArgument("weights", "must hold mask x mask values");
   int magnitude = 0;
   for (int w : kernel.weights) magnitude += std::abs(w);
   if (magnitude > 127)
-    throw InvalidArgument("weights", -1, -1,
-                          "sum of |weight| is " + std::to_string(magnitude) +
+    throw InvalidArgument("weights", "sum of |weight| is " + std::to_string(magnitude) +
                               "; the 8-bit ColorWeight and 16-bit Color registers of seed 004 "
                               "fig. 10 hold at most 127");
 }
@@ -175,13 +171,12 @@ IpfDofStats ipf_dof(Image& out, const Image& color, ConstPlane z, ConstPlane coc
   const ipf::DofQuantizer quantizer(program);
   if (color.channels() > ipf::kMaxLanes)
     throw InvalidArgument(
-        "color", -1, -1,
-        "has " + std::to_string(color.channels()) + " channels; the IPF pipe carries at most 4");
+        "color", "has " + std::to_string(color.channels()) + " channels; the IPF pipe carries at most 4");
   require_size(color, z.width(), z.height(), "color (against z)");
   require_size(color, coc.width(), coc.height(), "color (against coc)");
   const std::ptrdiff_t width = color.width(), height = color.height();
   const int channels = color.channels();
-  const int team = detail::resolve_threads(threads);
+  const int team = resolve_threads(threads);
   const std::vector<ipf::PipeData> pipe = input_processing(color, z, coc, quantizer, team);
 
   out.reset(width, height, channels);
@@ -217,7 +212,7 @@ namespace dof_detail {
 
 // The registry's interface carries no depth map; the signed CoC rises monotonically with
 // distance (thin lens and artist curve alike), so it orders pixels as fig. 11's Z-Value does.
-void run_ipf(Image& out, const DofFrame& frame, const DofSettings& settings, DofReport& report) {
+void run_ipf(Image& out, const DofFrame& frame, const DofOptions& settings, DofReport& report) {
   const Image& color = frame.color();
   const ConstPlane coc = frame.coc();
   ipf::DofProgram program;

@@ -24,12 +24,12 @@ void require_steppable(const LinkField& beta, const DiffusionOptions& options) {
           << " explicit steps, more than the " << options.max_explicit_steps
           << " allowed (DiffusionOptions::max_explicit_steps); an implicit (ADI) step blurs "
              "this far in one";
-  throw InvalidArgument("coc", -1, -1, message.str());
+  throw InvalidArgument("coc", message.str());
 }
 
 }  // namespace
 
-void run_mpad(Image& out, const DofFrame& frame, const DofSettings& settings, DofReport& report) {
+void run_mpad(Image& out, const DofFrame& frame, const DofOptions& settings, DofReport& report) {
   int steps = 0;
   diffusion_dof(out, frame, settings, report,
                 [&steps](Image& dst, const Image& src, ConstPlane coc, float in_focus_px,

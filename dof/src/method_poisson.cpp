@@ -51,7 +51,7 @@
 // Known artifacts (seed 000 §6.5). (1) The foreground: the gather by the pixel's own CoC cannot
 // blur a near object over a sharp background — the sharp background pixels keep their values, so
 // an out-of-focus near object keeps a sharp silhouette (fig. 6.3); blurs_foreground is false and
-// DofSettings::layers is ignored. (2) Colour leaking (fig. 6.2): the blurred levels already mix a
+// DofOptions::layers is ignored. (2) Colour leaking (fig. 6.2): the blurred levels already mix a
 // sharp object's colour into its surroundings, so a blurred pixel next to a bright sharp object
 // gets a faint halo whatever the weights (bilinear reads leak up to one pixel too). (3) Depth
 // order between two out-of-focus regions is approximated by the coverage weights, not
@@ -79,7 +79,7 @@
 #include "tridiff/blur/box.hpp"
 #include "tridiff/dof/method.hpp"
 #include "tridiff/dof/tiles.hpp"
-#include "tridiff/solvers/solve.hpp"
+#include "tridiff/threads.hpp"
 #include "frame.hpp"
 #include "tiled_gather.hpp"
 
@@ -467,7 +467,7 @@ std::string describe_levels(const std::vector<Level>& levels) {
 
 namespace dof_detail {
 
-void run_poisson(Image& out, const DofFrame& frame, const DofSettings& settings,
+void run_poisson(Image& out, const DofFrame& frame, const DofOptions& settings,
                  DofReport& report) {
   const Image& color = frame.color();
   Stages stages(report);

@@ -80,7 +80,7 @@
 #include "tridiff/blur/pyramid.hpp"
 #include "tridiff/dof/method.hpp"
 #include "tridiff/dof/tiles.hpp"
-#include "tridiff/solvers/solve.hpp"
+#include "tridiff/threads.hpp"
 #include "stage_clock.hpp"
 #include "frame.hpp"
 #include "tiled_gather.hpp"
@@ -309,7 +309,7 @@ void normalise(Image& out, ConstPlane transmit, int team) {
 
 namespace dof_detail {
 
-void run_pyramid_layers(Image& out, const DofFrame& frame, const DofSettings& settings,
+void run_pyramid_layers(Image& out, const DofFrame& frame, const DofOptions& settings,
                         DofReport& report) {
   const Image& color = frame.color();
   const std::ptrdiff_t width = color.width(), height = color.height();

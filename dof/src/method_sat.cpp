@@ -75,7 +75,7 @@
 #include "tridiff/blur/sat.hpp"
 #include "tridiff/dof/method.hpp"
 #include "tridiff/dof/tiles.hpp"
-#include "tridiff/solvers/solve.hpp"
+#include "tridiff/threads.hpp"
 #include "frame.hpp"
 #include "tiled_gather.hpp"
 
@@ -328,7 +328,7 @@ void composite_pixel(Image& out, const DofFrame& frame, const LayerTables& table
 
 namespace dof_detail {
 
-void run_sat(Image& out, const DofFrame& frame, const DofSettings& settings, DofReport& report) {
+void run_sat(Image& out, const DofFrame& frame, const DofOptions& settings, DofReport& report) {
   const Image& color = frame.color();
   const ConstPlane coc = frame.coc();
   const int channels = color.channels(), team = frame.threads();
@@ -364,7 +364,7 @@ void run_sat(Image& out, const DofFrame& frame, const DofSettings& settings, Dof
   if (settings.progress) settings.progress(1.0);
 }
 
-void run_sat_layers(Image& out, const DofFrame& frame, const DofSettings& settings,
+void run_sat_layers(Image& out, const DofFrame& frame, const DofOptions& settings,
                     DofReport& report) {
   const Image& color = frame.color();
   Stages stages(report);

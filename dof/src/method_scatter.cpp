@@ -7,7 +7,7 @@
 // coverage min(1, r + 1/2 - sqrt(dx² + dy²)) when positive — a radial ramp one pixel wide centred
 // on the disc's rim, so the support is the open disc of radius r + 1/2. The weights are the
 // coverages divided by their sum (area-normalised: a splat's weights sum to 1, so a pixel's
-// energy is conserved). A pixel with |c| < max(1, DofSettings::in_focus_coc_px) is a point: it
+// energy is conserved). A pixel with |c| < max(1, DofOptions::in_focus_coc_px) is a point: it
 // keeps its own value with weight exactly 1.
 //
 // The frame border is a mirror: the part of a disc that leaves the frame is reflected back into
@@ -44,7 +44,7 @@
 // every pixel receives its contributions in the same order (sources in raster order within a
 // layer), so the result does not depend on the number of threads.
 //
-// Skipping (DofSettings::skip_in_focus): 32 x 32 tiles that no disc reaches (after the mirror
+// Skipping (DofOptions::skip_in_focus): 32 x 32 tiles that no disc reaches (after the mirror
 // fold) hold only points, whose output is their input; they are copied and left out of the layer
 // passes. This changes no bit.
 #include <algorithm>
@@ -58,7 +58,7 @@
 
 #include "tridiff/dof/method.hpp"
 #include "tridiff/dof/tiles.hpp"
-#include "tridiff/solvers/solve.hpp"
+#include "tridiff/threads.hpp"
 #include "stage_clock.hpp"
 #include "frame.hpp"
 #include "tiled_gather.hpp"  // Stages
@@ -151,14 +151,13 @@ struct Box {
 // the first such pixel.
 void refuse_what_takes_too_long(const DofFrame& frame) {
   if (frame.width() * frame.height() > std::numeric_limits<std::int32_t>::max())
-    throw InvalidArgument("color", -1, -1, "has more than 2^31 pixels");
+    throw InvalidArgument("color", "has more than 2^31 pixels");
   if (frame.max_abs_coc() <= kMaxDiameter) return;
   const ConstPlane coc = frame.coc();
   for (std::ptrdiff_t y = 0; y < coc.height(); ++y)
     for (std::ptrdiff_t x = 0; x < coc.width(); ++x)
       if (std::fabs(coc(x, y)) > kMaxDiameter)
-        throw InvalidArgument("coc", -1, -1,
-                              "pixel (" + std::to_string(x) + ", " + std::to_string(y) +
+        throw InvalidArgument("coc", "pixel (" + std::to_string(x) + ", " + std::to_string(y) +
                                   ") has |CoC| " + std::to_string(std::fabs(coc(x, y))) +
                                   " px; the scatter reference takes at most " +
                                   std::to_string(int(kMaxDiameter)) + " px");
@@ -379,7 +378,7 @@ void finish_band(const DofFrame& frame, const WorkedTiles& tiles, ConstPlane tra
 
 namespace dof_detail {
 
-void run_scatter(Image& out, const DofFrame& frame, const DofSettings& settings,
+void run_scatter(Image& out, const DofFrame& frame, const DofOptions& settings,
                  DofReport& report) {
   refuse_what_takes_too_long(frame);
   const std::ptrdiff_t width = frame.width(), height = frame.height();

@@ -17,8 +17,7 @@ namespace {
 void require_same_shape(const Image& image, const Image& reference, const char* name) {
   if (image.width() != reference.width() || image.height() != reference.height() ||
       image.channels() != reference.channels())
-    throw InvalidArgument(name, -1, -1,
-                          "is " + std::to_string(image.width()) + " x " +
+    throw InvalidArgument(name, "is " + std::to_string(image.width()) + " x " +
                               std::to_string(image.height()) + " x " +
                               std::to_string(image.channels()) + ", the reference is " +
                               std::to_string(reference.width()) + " x " +
@@ -28,8 +27,7 @@ void require_same_shape(const Image& image, const Image& reference, const char* 
 
 void require_coc_size(const Image& reference, ConstPlane coc) {
   if (coc.width() != reference.width() || coc.height() != reference.height())
-    throw InvalidArgument("coc", -1, -1,
-                          "is " + std::to_string(coc.width()) + " x " +
+    throw InvalidArgument("coc", "is " + std::to_string(coc.width()) + " x " +
                               std::to_string(coc.height()) + ", the images are " +
                               std::to_string(reference.width()) + " x " +
                               std::to_string(reference.height()));

@@ -7,21 +7,21 @@
 #include <string>
 
 #include "tridiff/dof/method.hpp"
-#include "tridiff/solvers/solve.hpp"  // detail::resolve_threads
+#include "tridiff/threads.hpp"
 #include "frame.hpp"
 
 namespace tridiff {
 namespace dof_detail {
-void run_adi(Image&, const DofFrame&, const DofSettings&, DofReport&);
-void run_mpad(Image&, const DofFrame&, const DofSettings&, DofReport&);
-void run_ipf(Image&, const DofFrame&, const DofSettings&, DofReport&);
-void run_scatter(Image&, const DofFrame&, const DofSettings&, DofReport&);
-void run_auto(Image&, const DofFrame&, const DofSettings&, DofReport&);
-void run_poisson(Image&, const DofFrame&, const DofSettings&, DofReport&);
-void run_pyramid_layers(Image&, const DofFrame&, const DofSettings&, DofReport&);
-void run_sat(Image&, const DofFrame&, const DofSettings&, DofReport&);
-void run_sat_layers(Image&, const DofFrame&, const DofSettings&, DofReport&);
-void run_gems(Image&, const DofFrame&, const DofSettings&, DofReport&);
+void run_adi(Image&, const DofFrame&, const DofOptions&, DofReport&);
+void run_mpad(Image&, const DofFrame&, const DofOptions&, DofReport&);
+void run_ipf(Image&, const DofFrame&, const DofOptions&, DofReport&);
+void run_scatter(Image&, const DofFrame&, const DofOptions&, DofReport&);
+void run_auto(Image&, const DofFrame&, const DofOptions&, DofReport&);
+void run_poisson(Image&, const DofFrame&, const DofOptions&, DofReport&);
+void run_pyramid_layers(Image&, const DofFrame&, const DofOptions&, DofReport&);
+void run_sat(Image&, const DofFrame&, const DofOptions&, DofReport&);
+void run_sat_layers(Image&, const DofFrame&, const DofOptions&, DofReport&);
+void run_gems(Image&, const DofFrame&, const DofOptions&, DofReport&);
 }  // namespace dof_detail
 
 namespace {
@@ -32,18 +32,21 @@ const DofMethod& registered_with(DofKernel kernel);
 // written, while the CoC is still read), checks and analyses the frame once (DofFrame), and
 // runs the method on it (run_on_frame).
 template <DofKernel Kernel>
-void checked(Image& out, const Image& color, ConstPlane coc, const DofSettings& settings,
-             DofReport& report) {
+DofReport checked(Image& out, const Image& color, ConstPlane coc, const DofOptions& settings) {
   if (!out.empty() && coc.data()) {
     const float* begin = out.data();
     const float* end = begin + out.plane_stride() * out.channels();
     if (coc.data() >= begin && coc.data() < end)
-      throw InvalidArgument("coc", -1, -1, "lies in the output image (give a separate plane)");
+      throw InvalidArgument("coc", "lies in the output image (give a separate plane)");
   }
   const DofFrame frame(color, coc, settings);
+  DofReport report;
   // `auto` copies nothing itself: the method it chooses decides (run_on_frame).
-  if (Kernel == dof_detail::run_auto) return Kernel(out, frame, settings, report);
-  dof_detail::run_on_frame(registered_with(Kernel), out, frame, settings, report);
+  if (Kernel == dof_detail::run_auto)
+    Kernel(out, frame, settings, report);
+  else
+    dof_detail::run_on_frame(registered_with(Kernel), out, frame, settings, report);
+  return report;
 }
 
 // A registry entry: the method's description, run through `checked`.
@@ -147,24 +150,23 @@ const DofMethod& find_dof_method(std::string_view name) {
     if (method.name == name) return method;
     known += (known.empty() ? "" : ", ") + std::string(method.name);
   }
-  throw InvalidArgument("method", -1, -1,
-                        "unknown method '" + std::string(name) + "' (known: " + known + ")");
+  throw InvalidArgument("method", "unknown method '" + std::string(name) + "' (known: " + known + ")");
 }
 
 namespace {
 
 [[noreturn]] void bad_pixel(const char* what, std::ptrdiff_t x, std::ptrdiff_t y, int c) {
-  throw InvalidArgument(what, -1, -1,
-                        "pixel (" + std::to_string(x) + ", " + std::to_string(y) + ")" +
+  throw InvalidArgument(what, "pixel (" + std::to_string(x) + ", " + std::to_string(y) + ")" +
                             (c >= 0 ? ", channel " + std::to_string(c) : std::string()) +
                             " is not finite");
 }
 
 // A fast pass (probe = sum of 0 * v is zero unless some v is NaN or infinite), then, only if
 // it failed, a slow pass that names the first bad pixel.
-void require_finite(ConstPlane plane, const char* what, int channel) {
+void require_finite(ConstPlane plane, const char* what, int channel, int threads) {
+  const int team = resolve_threads(threads);
   bool bad = false;
-#pragma omp parallel for schedule(static) reduction(|| : bad)
+#pragma omp parallel for num_threads(team) schedule(static) reduction(|| : bad)
   for (std::ptrdiff_t y = 0; y < plane.height(); ++y) {
     const float* row = plane.row(y);
     float probe = 0;
@@ -197,13 +199,13 @@ float max_abs(ConstPlane plane, int threads) {
 
 }  // namespace
 
-DofFrame::DofFrame(const Image& color, ConstPlane coc, const DofSettings& settings)
+DofFrame::DofFrame(const Image& color, ConstPlane coc, const DofOptions& settings)
     : color_(&color),
       coc_(coc),
       threads_(1),
       focus_{sharp_below_px(settings.in_focus_coc_px)} {
-  validate_dof_input(color, coc);
-  threads_ = detail::resolve_threads(settings.threads);
+  threads_ = resolve_threads(settings.threads);
+  validate_dof_input(color, coc, threads_);
   max_abs_coc_ = max_abs(coc, threads_);
 }
 
@@ -221,7 +223,7 @@ const TileMap& DofFrame::tiles() const {
 namespace dof_detail {
 
 void run_on_frame(const DofMethod& method, Image& out, const DofFrame& frame,
-                  const DofSettings& settings, DofReport& report) {
+                  const DofOptions& settings, DofReport& report) {
   if (method.in_place || &out != &frame.color())
     return method.kernel(out, frame, settings, report);
   const Image input = frame.color();
@@ -230,20 +232,19 @@ void run_on_frame(const DofMethod& method, Image& out, const DofFrame& frame,
 
 }  // namespace dof_detail
 
-void validate_dof_input(const Image& color, ConstPlane coc) {
-  validate_coc(color, coc);
-  for (int c = 0; c < color.channels(); ++c) require_finite(color.plane(c), "color", c);
+void validate_dof_input(const Image& color, ConstPlane coc, int threads) {
+  validate_coc(color, coc, threads);
+  for (int c = 0; c < color.channels(); ++c) require_finite(color.plane(c), "color", c, threads);
 }
 
-void validate_coc(const Image& color, ConstPlane coc) {
+void validate_coc(const Image& color, ConstPlane coc, int threads) {
   validate_coc_size(color, coc);
-  require_finite(coc, "coc", -1);
+  require_finite(coc, "coc", -1, threads);
 }
 
 void validate_coc_size(const Image& color, ConstPlane coc) {
   if (coc.width() != color.width() || coc.height() != color.height())
-    throw InvalidArgument("coc", -1, -1,
-                          "is " + std::to_string(coc.width()) + " x " +
+    throw InvalidArgument("coc", "is " + std::to_string(coc.width()) + " x " +
                               std::to_string(coc.height()) + ", the colour image is " +
                               std::to_string(color.width()) + " x " +
                               std::to_string(color.height()));

@@ -149,8 +149,7 @@ constexpr std::array kScenes{
 
 void require_size(std::ptrdiff_t width, std::ptrdiff_t height) {
   if (width < 1 || height < 1)
-    throw InvalidArgument("size", -1, -1,
-                          std::to_string(width) + " x " + std::to_string(height) +
+    throw InvalidArgument("size", std::to_string(width) + " x " + std::to_string(height) +
                               " (a scene needs at least 1 x 1)");
 }
 
@@ -176,15 +175,13 @@ DofScene make_dof_scene(std::string_view name, std::ptrdiff_t width, std::ptrdif
   std::string known;
   for (const DofSceneInfo& info : kScenes)
     known += (known.empty() ? "" : ", ") + std::string(info.name);
-  throw InvalidArgument("scene", -1, -1,
-                        "unknown scene '" + id + "' (known: " + known + ")");
+  throw InvalidArgument("scene", "unknown scene '" + id + "' (known: " + known + ")");
 }
 
 DofScene focus_fraction_scene(std::ptrdiff_t width, std::ptrdiff_t height, double fraction) {
   require_size(width, height);
   if (!(fraction >= 0 && fraction <= 1))
-    throw InvalidArgument("fraction", -1, -1,
-                          std::to_string(fraction) + " is not in [0, 1]");
+    throw InvalidArgument("fraction", std::to_string(fraction) + " is not in [0, 1]");
   const double scale = std::sqrt(fraction);
   const auto block_w = std::ptrdiff_t(std::lround(scale * double(width))),
              block_h = std::ptrdiff_t(std::lround(scale * double(height)));

@@ -5,12 +5,12 @@
 #include <cmath>
 #include <string>
 
-#include "tridiff/solvers/solve.hpp"  // detail::resolve_threads: one meaning of `threads`
+#include "tridiff/threads.hpp"
 
 namespace tridiff {
 namespace {
 
-int thread_count(int threads) { return detail::resolve_threads(threads); }
+int thread_count(int threads) { return resolve_threads(threads); }
 
 // The tile's own statistics from its pixels.
 TileInfo classify(ConstPlane coc, const Rect& area, FocusTest focus) {
@@ -45,11 +45,11 @@ TileMap::TileMap(ConstPlane coc, float in_focus_coc_px, std::ptrdiff_t tile,
                  std::ptrdiff_t margin_px, int threads)
     : width_(coc.width()), height_(coc.height()), tile_(tile), in_focus_(in_focus_coc_px) {
   if (tile < 1)
-    throw InvalidArgument("tile", -1, -1, "must be at least 1, got " + std::to_string(tile));
+    throw InvalidArgument("tile", "must be at least 1, got " + std::to_string(tile));
   if (margin_px < 0)
-    throw InvalidArgument("margin_px", -1, -1, "must be >= 0, got " + std::to_string(margin_px));
+    throw InvalidArgument("margin_px", "must be >= 0, got " + std::to_string(margin_px));
   if (!(in_focus_coc_px >= 0))
-    throw InvalidArgument("in_focus_coc_px", -1, -1, "must be >= 0");
+    throw InvalidArgument("in_focus_coc_px", "must be >= 0");
   tiles_x_ = (width_ + tile - 1) / tile;
   tiles_y_ = (height_ + tile - 1) / tile;
   info_.resize(std::size_t(tiles_x_ * tiles_y_));
@@ -110,7 +110,7 @@ Rect TileMap::rect(std::ptrdiff_t tx, std::ptrdiff_t ty) const {
 void copy_unreached_tiles(Plane out, ConstPlane in, const TileMap& tiles, int threads) {
   if (in.width() != tiles.width() || in.height() != tiles.height() ||
       out.width() != tiles.width() || out.height() != tiles.height())
-    throw InvalidArgument("out", -1, -1, "planes must have the tile map's size");
+    throw InvalidArgument("out", "planes must have the tile map's size");
 #pragma omp parallel for schedule(static) num_threads(thread_count(threads))
   for (std::ptrdiff_t ty = 0; ty < tiles.tiles_y(); ++ty)
     for (std::ptrdiff_t tx = 0; tx < tiles.tiles_x(); ++tx) {

@@ -35,8 +35,4 @@ inline int resolve_threads(int threads) {
 #endif
 }
 
-namespace detail {
-using tridiff::resolve_threads;  // the name the library used before this header
-}  // namespace detail
-
 }  // namespace tridiff

@@ -62,11 +62,11 @@ struct MethodChoice {
 // The choice for the CoC map `coc` at `settings` (in_focus_coc_px, error_budget_psnr) from
 // `table`. Methods missing from the table are not considered (the reason names them).
 // InvalidArgument("table") if no registered method has a row.
-MethodChoice choose_dof_method(ConstPlane coc, const DofSettings& settings,
+MethodChoice choose_dof_method(ConstPlane coc, const DofOptions& settings,
                                std::span<const MethodTableRow> table);
 // The same from the frame's classification (TileMap::kDefaultTile, no margin, at
 // sharp_below_px(settings.in_focus_coc_px)): what `auto` does with the frame it was given.
-MethodChoice choose_dof_method(const TileMap& tiles, const DofSettings& settings,
+MethodChoice choose_dof_method(const TileMap& tiles, const DofOptions& settings,
                                std::span<const MethodTableRow> table);
 
 }  // namespace tridiff

@@ -15,7 +15,7 @@
 
 namespace tridiff {
 
-struct DofSettings {
+struct DofOptions {
   int threads = 0;                 // 0: all cores
   bool skip_in_focus = true;       // false: every pixel takes the full path (the reference)
   bool layers = false;             // blur the near field as its own layer (Kass et al. 2006)
@@ -41,13 +41,13 @@ struct DofReport {
 // out = `color` (linear light, any channel count) with depth of field for the signed CoC
 // diameters `coc` (pixels; negative in front of the focus). out is reallocated as needed. out
 // may be color itself (see DofMethod::in_place); coc must not lie in out (InvalidArgument).
-using DofRun = void (*)(Image& out, const Image& color, ConstPlane coc, const DofSettings&,
-                        DofReport&);
+using DofRun = DofReport (*)(Image& out, const Image& color, ConstPlane coc,
+                             const DofOptions& options);
 
 // What a method implements: the same, on a frame that the registry has checked and analysed
 // once (dof/src/frame.hpp, library-internal). `run` builds the frame and calls this.
 class DofFrame;
-using DofKernel = void (*)(Image& out, const DofFrame& frame, const DofSettings&, DofReport&);
+using DofKernel = void (*)(Image& out, const DofFrame& frame, const DofOptions&, DofReport&);
 
 struct DofMethod {
   std::string_view name;
@@ -66,6 +66,12 @@ struct DofMethod {
   DofKernel kernel = nullptr;
 };
 
+// out = `color` with depth of field by `method`: method.run, the one way to call any method.
+inline DofReport depth_of_field(Image& out, const Image& color, ConstPlane coc,
+                                const DofMethod& method, const DofOptions& options = {}) {
+  return method.run(out, color, coc, options);
+}
+
 // Every registered method, in a fixed order.
 std::span<const DofMethod> dof_methods();
 // The method called `name`; InvalidArgument listing the known names otherwise.
@@ -75,8 +81,9 @@ const DofMethod& find_dof_method(std::string_view name);
 // naming the pixel and channel otherwise). Every registered method's `run` does this once,
 // before the method; validate_coc checks the sizes and the CoC only, validate_coc_size the
 // sizes alone.
-void validate_dof_input(const Image& color, ConstPlane coc);
-void validate_coc(const Image& color, ConstPlane coc);
+// `threads`: 0 = all cores.
+void validate_dof_input(const Image& color, ConstPlane coc, int threads = 0);
+void validate_coc(const Image& color, ConstPlane coc, int threads = 0);
 void validate_coc_size(const Image& color, ConstPlane coc);
 
 }  // namespace tridiff

@@ -43,7 +43,7 @@ inline float sharp_below_px(float in_focus_coc_px) { return std::max(1.f, in_foc
 // The one definition of "in focus" for every DOF method and the tile classification: a signed
 // CoC c (finite) is sharp when |c| < sharp_below; otherwise it is near (in front of the focus,
 // c <= -sharp_below) or far (c >= sharp_below). The gather and scatter methods and TileMap use
-// sharp_below_px(DofSettings::in_focus_coc_px); the diffusion methods the setting itself (their
+// sharp_below_px(DofOptions::in_focus_coc_px); the diffusion methods the setting itself (their
 // conductance vanishes continuously, so a sub-pixel threshold means something to them).
 struct FocusTest {
   float sharp_below = 1.f;
