@@ -29,7 +29,7 @@ int main() {
   check(tridiff::border_index(-1, 5, tridiff::Border::mirror) == 0, "mirror border");
   check(tridiff::border_index(6, 5, tridiff::Border::periodic) == 1, "periodic border");
   check(tridiff::border_index(-3, 5, tridiff::Border::zero) == -1, "zero border");
-  std::printf("%s\n", failures == 0 ? "tridiff::blur consumer: ok"
-                                    : "tridiff::blur consumer: FAILED");
+  std::printf("%s\n",
+              failures == 0 ? "tridiff::blur consumer: ok" : "tridiff::blur consumer: FAILED");
   return failures == 0 ? 0 : 1;
 }

@@ -26,7 +26,7 @@ int main() {
   } catch (const tridiff::InvalidArgument& e) {
     check(e.argument() == "f_number", "the error names f_number");
   }
-  std::printf("%s\n", failures == 0 ? "tridiff::dof consumer: ok"
-                                    : "tridiff::dof consumer: FAILED");
+  std::printf("%s\n",
+              failures == 0 ? "tridiff::dof consumer: ok" : "tridiff::dof consumer: FAILED");
   return failures == 0 ? 0 : 1;
 }

@@ -32,7 +32,7 @@ int main() {
   const unsigned char signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
   check(png.size() > 8 && std::equal(signature, signature + 8, png.begin()), "PNG signature");
 
-  std::printf("%s\n", failures == 0 ? "tridiff::image consumer: ok"
-                                    : "tridiff::image consumer: FAILED");
+  std::printf("%s\n",
+              failures == 0 ? "tridiff::image consumer: ok" : "tridiff::image consumer: FAILED");
   return failures == 0 ? 0 : 1;
 }
