@@ -1,13 +1,13 @@
-// The stability table: every matrix class of tests/stability_matrices.hpp x every tridiff
+// The stability table: every matrix class of testing/stability_matrices.hpp x every tridiff
 // method x {float, double} x a few sizes, solved by tridiff and by LAPACK ?gtsv, with forward
 // and backward errors in long double against a long-double reference (refined_reference in
-// tests/stability_measure.hpp: the Eigen LU of tests/reference.hpp, refined).
+// testing/stability_measure.hpp: the Eigen LU of testing/reference.hpp, refined).
 //
 //   tridiff_stability_table [--out FILE] [--sizes 16,1000,65537] [--seed S]
 //
 // Writes JSON (to FILE, else stdout): one row per class, method, thread count, precision and n
 // with tridiff's outcome and errors, LAPACK's, their ratios ours / max(LAPACK, eps)
-// (lapack_floor in tests/stability_measure.hpp says why eps) and LAPACK's estimate of
+// (lapack_floor in testing/stability_measure.hpp says why eps) and LAPACK's estimate of
 // kappa_1(A). Outcomes: solved, refused (NumericalError: not dominant, unsafe for a pivot-free
 // method), singular (NumericalError: zero or vanishing pivot; for LAPACK, info > 0), overflow
 // (NumericalError: the solution overflowed), error (anything else), nonfinite (a non-finite x

@@ -4,6 +4,7 @@
 #   bash scripts/deps.sh              # the build, tests and benchmarks
 #   bash scripts/deps.sh notebooks    # those plus the notebooks' Python (scripts/notebooks.sh)
 #   bash scripts/deps.sh fuzz         # those plus clang and libFuzzer (scripts/fuzz.sh)
+#   bash scripts/deps.sh format       # those plus clang-format 14 (scripts/format.sh --check)
 set -euo pipefail
 
 packages=(
@@ -25,11 +26,16 @@ notebook_packages=(
 # The fuzz targets (fuzz/) need clang: libFuzzer ships in clang's runtime package, and clang's
 # -fopenmp needs LLVM's OpenMP (libomp), not GCC's.
 fuzz_packages=(clang libclang-rt-14-dev libomp-dev)
+# The format check (scripts/format.sh, .clang-format): Debian 12's clang-format is version 14,
+# the version the configuration was measured with.
+format_packages=(clang-format)
 for group in "$@"; do
   case "$group" in
     notebooks) packages+=("${notebook_packages[@]}") ;;
     fuzz) packages+=("${fuzz_packages[@]}") ;;
-    *) echo "scripts/deps.sh: unknown group '$group' (expected: notebooks, fuzz)" >&2; exit 2 ;;
+    format) packages+=("${format_packages[@]}") ;;
+    *) echo "scripts/deps.sh: unknown group '$group' (expected: notebooks, fuzz, format)" >&2
+       exit 2 ;;
   esac
 done
 

@@ -252,6 +252,9 @@ TEST(BlurRecursive, OddSizesAndBordersMatchTheReference) {
   }
 }
 
+// At sigma 20 the sections' outputs are about (1 - |z|)^-2 times the input and cancel in the
+// sum, so their roundings show: iir-deriche measured 0.4e-6 (6 eps) with FMA contraction
+// (-march=native here) and 2.9e-6 (38 eps) on the x86-64 baseline (TRIDIFF_NATIVE=OFF).
 TEST(BlurRecursive, ConstantStaysConstantAndThreadsAgree) {
   for (const RecursiveCase& c : recursive_cases()) {
     const BlurMethod& method = find_blur_method(c.name);
@@ -259,7 +262,7 @@ TEST(BlurRecursive, ConstantStaysConstantAndThreadsAgree) {
     Image out(70, 45, 1);
     blur(out.plane(0), flat.plane(0), method, {20.0});
     for (std::ptrdiff_t y = 0; y < 45; ++y)
-      for (std::ptrdiff_t x = 0; x < 70; ++x) ASSERT_NEAR(out(x, y, 0), 0.625f, 2e-6) << c.name;
+      for (std::ptrdiff_t x = 0; x < 70; ++x) ASSERT_NEAR(out(x, y, 0), 0.625f, 1e-5) << c.name;
     const Image in = random_image(70, 45, 9);
     Image one(70, 45, 1), two(70, 45, 1);
     blur(one.plane(0), in.plane(0), method, {2 * c.small_sigma, Border::replicate, 1});

@@ -69,22 +69,26 @@ LinkField links_from_pixels(ConstPlane value, ToLink to_link, int threads) {
           // The checks compare bit patterns as integers (integer reductions vectorise; float
           // min/max reductions do not, in GCC 12): for floats >= +0 the order is the same, a
           // negative float (or -0) is a negative integer, NaN and infinity are >= kInfinity.
-          std::int32_t highest = 0, lowest = 0;
-#pragma omp simd reduction(max : highest) reduction(min : lowest)
+          // Negatives are found by OR-ing the sign bits, not by a min: with SSE2 alone
+          // (TRIDIFF_NATIVE=OFF) GCC 12 compiled the max and min pair through an MMX register
+          // and left the x87 stack marked full (no emms), so the caller's next long double
+          // result was NaN.
+          std::int32_t highest = 0, sign_bits = 0;
+#pragma omp simd reduction(max : highest) reduction(| : sign_bits)
           for (std::ptrdiff_t x = x0; x < x1_right; ++x) {
             const auto b = std::bit_cast<std::int32_t>(here[x]);
             highest = std::max(highest, b);
-            lowest = std::min(lowest, b);
+            sign_bits |= b;
           }
           if (has_below) {
-#pragma omp simd reduction(max : highest) reduction(min : lowest)
+#pragma omp simd reduction(max : highest) reduction(| : sign_bits)
             for (std::ptrdiff_t x = x0; x < x1; ++x) {
               const auto b = std::bit_cast<std::int32_t>(below[x]);
               highest = std::max(highest, b);
-              lowest = std::min(lowest, b);
+              sign_bits |= b;
             }
           }
-          if (lowest < 0 || highest >= kInfinity) bad_value = true;
+          if (sign_bits < 0 || highest >= kInfinity) bad_value = true;
           if (highest == 0) continue;
           // Valid conductances give valid links (each the smaller of two).
           std::int32_t hm = 0, vm = 0;

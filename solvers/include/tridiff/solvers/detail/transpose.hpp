@@ -122,7 +122,7 @@ inline void gather_into_lanes(const T* const* rows, std::ptrdiff_t x, std::ptrdi
 // finish_streaming_stores() before another thread may read what was stored.
 template <class T, int W>
 inline void scatter_from_lanes(const T* block, std::ptrdiff_t columns, T* const* rows,
-                               std::ptrdiff_t x, bool streaming = false) {
+                               std::ptrdiff_t x, [[maybe_unused]] bool streaming = false) {
   for (std::ptrdiff_t k = 0; k < columns; k += 16) {
     const std::ptrdiff_t width = std::min<std::ptrdiff_t>(16, columns - k);
 #if defined(__AVX512F__)

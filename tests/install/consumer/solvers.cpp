@@ -1,4 +1,4 @@
-// Uses the installed tridiff::solvers: solves [4 1 0; 1 4 1; 0 1 4] x = (6, 12, 14), whose exact
+// tridiff::solvers, installed: solves [4 1 0; 1 4 1; 0 1 4] x = (6, 12, 14), whose exact
 // solution is x = (1, 2, 3), by every method, and checks that a bad call throws. Exits 0 only if
 // every answer is right.
 #include <tridiff/solvers.hpp>
