@@ -121,7 +121,7 @@ ImageBlur method_blur(const BlurMethod& method) {
 }
 
 struct Quality {
-  BlurError error;       // worst channel's max error, mean of the others
+  BlurError error;         // worst channel's max error, mean of the others
   double seconds_256 = 0;  // best of two calls on 256^2 (1 thread): the cost guard
 };
 
@@ -136,8 +136,7 @@ const std::vector<DoublePlane>& exact(double sigma, Border border) {
   return cache[key] = std::move(planes);
 }
 
-const Quality& quality(const std::string& name, const ImageBlur& run, double sigma,
-                       Border border) {
+const Quality& quality(const std::string& name, const ImageBlur& run, double sigma, Border border) {
   static std::map<std::pair<std::string, double>, Quality> cache;
   auto key = std::pair{name, sigma};
   if (auto it = cache.find(key); it != cache.end()) return it->second;
@@ -252,8 +251,7 @@ void register_all() {
             ("BM_blur_fma_peak/threads:" + std::to_string(threads)).c_str(), run_fma_peak, threads)
             ->Unit(benchmark::kMillisecond)
             ->UseRealTime();
-      benchmark::RegisterBenchmark(sized("BM_blur_copy", n, threads).c_str(), run_copy, n,
-                                   threads)
+      benchmark::RegisterBenchmark(sized("BM_blur_copy", n, threads).c_str(), run_copy, n, threads)
           ->Unit(benchmark::kMillisecond)
           ->UseRealTime();
       for (double sigma : kSigmas) {
@@ -261,9 +259,8 @@ void register_all() {
         for (const BlurMethod& m : blur_methods()) {
           if (sigma < m.min_sigma || sigma > m.max_sigma) continue;
           const std::string name(m.name);
-          benchmark::RegisterBenchmark(sized("BM_blur/" + name + s, n, threads).c_str(),
-                                       run_blur, name, method_blur(m), border_for(m), sigma, n,
-                                       threads)
+          benchmark::RegisterBenchmark(sized("BM_blur/" + name + s, n, threads).c_str(), run_blur,
+                                       name, method_blur(m), border_for(m), sigma, n, threads)
               ->Unit(benchmark::kMillisecond)
               ->UseRealTime();
         }

@@ -113,14 +113,14 @@ double copy_seconds(std::ptrdiff_t width, std::ptrdiff_t height, int threads) {
   for (int i = 0; i < 5; ++i) {
     const auto start = std::chrono::steady_clock::now();
     copy_image(dst, src, threads);
-    best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
-                              .count());
+    best = std::min(
+        best, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   }
   return cache[key] = best;
 }
 
-void set_counters(benchmark::State& state, std::ptrdiff_t width, std::ptrdiff_t height,
-                  int threads, double skipped) {
+void set_counters(benchmark::State& state, std::ptrdiff_t width, std::ptrdiff_t height, int threads,
+                  double skipped) {
   const double iterations = double(state.iterations());
   state.counters["pixels_per_second"] =
       Counter(iterations * double(width * height), Counter::kIsRate);
@@ -247,11 +247,10 @@ const DofError& error_vs_scatter(const DofMethod& method, const std::string& nam
 // cost guard; errors against scatter unless it is a focus-fraction run.
 void bm_method(benchmark::State& state, const DofMethod& method, const std::string& name,
                int focus_percent, std::ptrdiff_t width, std::ptrdiff_t height, int threads) {
-  const double estimate =
-      estimated_seconds(method, name, focus_percent, width, height, threads);
+  const double estimate = estimated_seconds(method, name, focus_percent, width, height, threads);
   if (estimate > kMaxRunSeconds) {
-    state.SkipWithError(("cost guard: one run estimated at " + std::to_string(estimate) +
-                         " s > " + std::to_string(kMaxRunSeconds) + " s")
+    state.SkipWithError(("cost guard: one run estimated at " + std::to_string(estimate) + " s > " +
+                         std::to_string(kMaxRunSeconds) + " s")
                             .c_str());
     return;
   }

@@ -48,17 +48,17 @@
 
 // LAPACK, Fortran calling convention (no character arguments, so no hidden string lengths).
 extern "C" {
-void sgtsv_(const int* n, const int* nrhs, float* dl, float* d, float* du, float* b,
-            const int* ldb, int* info);
+void sgtsv_(const int* n, const int* nrhs, float* dl, float* d, float* du, float* b, const int* ldb,
+            int* info);
 void dgtsv_(const int* n, const int* nrhs, double* dl, double* d, double* du, double* b,
             const int* ldb, int* info);
 }
 
 namespace {
 
+using std::ptrdiff_t;
 using tridiff::BatchLayout;
 using tridiff::Method;
-using std::ptrdiff_t;
 
 // ---------------------------------------------------------------------------------------------
 // Memory
@@ -194,7 +194,9 @@ BatchLayout layout_of(Shape shape) {
 
 std::string name_of(Shape shape) {
   const BatchLayout layout = layout_of(shape);
-  const char* kind = shape == Shape::Columns ? "columns" : shape == Shape::Single ? "single" : "rows";
+  const char* kind = shape == Shape::Columns  ? "columns"
+                     : shape == Shape::Single ? "single"
+                                              : "rows";
   return std::string(kind) + ":" + std::to_string(layout.count) + "x" + std::to_string(layout.n);
 }
 
@@ -268,8 +270,8 @@ double backward_error(const Problem<T>& p, const BatchLayout& layout) {
       const double left = p.left(layout, s, i), right = p.right(layout, s, i);
       const double x_left = i > 0 ? double(p.x[layout.offset(s, i - 1)]) : 0;
       const double x_right = i + 1 < layout.n ? double(p.x[layout.offset(s, i + 1)]) : 0;
-      const double terms[] = {-left * x_left, (1 + left + right) * double(p.x[o]),
-                              -right * x_right, -double(p.rhs[o])};
+      const double terms[] = {-left * x_left, (1 + left + right) * double(p.x[o]), -right * x_right,
+                              -double(p.rhs[o])};
       double residual = 0, scale = 0;
       for (double term : terms) {
         residual += term;
@@ -324,8 +326,8 @@ void bm_tridiff(benchmark::State& state, Method method, Form form, Shape shape, 
       if (m == nullptr)
         tridiff::solve_diffusion(p.beta.data(), p.rhs.data(), p.x.data(), layout, options);
       else
-        tridiff::solve(m->sub.data(), m->diag.data(), m->super.data(), p.rhs.data(),
-                       p.x.data(), layout, options);
+        tridiff::solve(m->sub.data(), m->diag.data(), m->super.data(), p.rhs.data(), p.x.data(),
+                       layout, options);
       benchmark::ClobberMemory();
     }
   } catch (const std::exception& error) {
@@ -536,9 +538,8 @@ void register_solvers(const std::string& scalar) {
         for (Method method : tridiff::kAllMethods) {
           if (form == Form::GeneralUnchecked && method != Method::Thomas) continue;
           if (shape == Shape::Single && threads > 1 && is_reduction(method)) continue;
-          const std::string name =
-              join({std::string("BM_solvers_") + to_string(method), scalar, name_of(form),
-                    name_of(shape), threads_arg(threads)});
+          const std::string name = join({std::string("BM_solvers_") + to_string(method), scalar,
+                                         name_of(form), name_of(shape), threads_arg(threads)});
           finish(benchmark::RegisterBenchmark(name.c_str(), bm_tridiff<T>, method, form, shape,
                                               threads));
         }

@@ -91,9 +91,16 @@ void run_precision(const char* precision, const std::vector<std::ptrdiff_t>& siz
       const long double condition = condition_estimate(system);
       const Measurement lapack = measure_lapack(system, reference);
       auto add = [&](Method method, int threads) {
-        Row row{matrix_class.name, method,    threads, precision,
-                n,                 condition, measure_tridiff(system, method, reference, threads),
-                lapack,            NAN,       NAN};
+        Row row{matrix_class.name,
+                method,
+                threads,
+                precision,
+                n,
+                condition,
+                measure_tridiff(system, method, reference, threads),
+                lapack,
+                NAN,
+                NAN};
         if (row.ours.outcome == Outcome::Solved && lapack.outcome == Outcome::Solved) {
           row.forward_ratio = ratio_to_lapack<T>(row.ours.forward, lapack.forward);
           row.backward_ratio = ratio_to_lapack<T>(row.ours.backward, lapack.backward);
@@ -122,9 +129,8 @@ void write_json(std::ostream& out, const std::vector<Row>& rows,
     const Row& r = rows[i];
     out << "    {\"class\": " << json_string(r.matrix_class)
         << ", \"method\": " << json_string(to_string(r.method)) << ", \"threads\": " << r.threads
-        << ", \"parts\": " << r.ours.parts
-        << ", \"precision\": " << json_string(r.precision) << ", \"n\": " << r.n
-        << ", \"outcome\": " << json_string(to_string(r.ours.outcome))
+        << ", \"parts\": " << r.ours.parts << ", \"precision\": " << json_string(r.precision)
+        << ", \"n\": " << r.n << ", \"outcome\": " << json_string(to_string(r.ours.outcome))
         << ", \"forward_error\": " << json_number(r.ours.forward)
         << ", \"backward_error\": " << json_number(r.ours.backward)
         << ", \"lapack_outcome\": " << json_string(to_string(r.lapack.outcome))
@@ -143,8 +149,8 @@ void write_json(std::ostream& out, const std::vector<Row>& rows,
 // One cell of the summary: the worst max(forward, backward) ratio over the sizes where both
 // tridiff and LAPACK solved; then, for the other sizes, what happened: tridiff's outcome, or
 // "L:<outcome>" where only LAPACK failed; "@n" unless it happened at every size.
-std::string summary_cell(const std::vector<Row>& rows, std::string_view matrix_class,
-                         Method method, int threads, std::string_view precision) {
+std::string summary_cell(const std::vector<Row>& rows, std::string_view matrix_class, Method method,
+                         int threads, std::string_view precision) {
   long double worst = -1;
   std::vector<std::pair<std::string, std::ptrdiff_t>> events;
   std::size_t sizes = 0;
@@ -166,10 +172,9 @@ std::string summary_cell(const std::vector<Row>& rows, std::string_view matrix_c
     std::snprintf(text, sizeof text, "%.3Lg", worst);
     cell = text;
   }
-  const bool everywhere =
-      events.size() == sizes && std::all_of(events.begin(), events.end(), [&](const auto& e) {
-        return e.first == events[0].first;
-      });
+  const bool everywhere = events.size() == sizes &&
+                          std::all_of(events.begin(), events.end(),
+                                      [&](const auto& e) { return e.first == events[0].first; });
   if (everywhere && !events.empty()) return events[0].first;
   for (const auto& [what, n] : events)
     cell += (cell.empty() ? "" : " ") + what + "@" + std::to_string(n);
@@ -180,7 +185,8 @@ void write_summary(std::ostream& out, const std::vector<Row>& rows) {
   out << "Worst ratio max(forward, backward) to LAPACK (floored at eps) over the sizes;\n"
          "outcome@n where tridiff did not solve, L:outcome@n where only LAPACK did not, the\n"
          "outcome alone if at every size. ratio <= 10 is the test's bound for auto.\n"
-         "Columns x" << kPartitionedThreads << ": on " << kPartitionedThreads
+         "Columns x"
+      << kPartitionedThreads << ": on " << kPartitionedThreads
       << " threads (partitioned Thomas at n >= 32768).\n";
   std::vector<std::pair<Method, int>> columns;
   for (Method method : kAllMethods) columns.emplace_back(method, 1);

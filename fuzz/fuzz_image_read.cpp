@@ -88,8 +88,8 @@ DepthOptions pick_depth_options(std::uint8_t byte) {
   constexpr const char* kChannels[] = {"", "Z", "depth", "A", "R", "Y", "G", "no such channel"};
   constexpr float kNan = std::numeric_limits<float>::quiet_NaN();
   constexpr float kInf = std::numeric_limits<float>::infinity();
-  constexpr float kPlanes[][2] = {{0, 0},  {0, 1},   {1, 10}, {0.1f, 1e4f},
-                                  {5, 1},  {kNan, 1}, {0, kInf}, {-1, 1}};
+  constexpr float kPlanes[][2] = {{0, 0}, {0, 1},    {1, 10},   {0.1f, 1e4f},
+                                  {5, 1}, {kNan, 1}, {0, kInf}, {-1, 1}};
   DepthOptions options;
   options.channel = kChannels[byte & 7];
   options.convention = static_cast<DepthConvention>((byte >> 3) & 3);
@@ -113,7 +113,8 @@ void check_finite(const Image& image, const char* what, bool positive) {
 
 void read_as_color(const std::string& path, ColorEncoding encoding) {
   try {
-    const ColorImage color = read_color(path, {.encoding = encoding, .max_pixels = kMaxPixels, .threads = 1});
+    const ColorImage color =
+        read_color(path, {.encoding = encoding, .max_pixels = kMaxPixels, .threads = 1});
     if (color.pixels.channels() != 3 && color.pixels.channels() != 4)
       finding("read_color returned " + std::to_string(color.pixels.channels()) + " channels");
     if (color.encoding == ColorEncoding::Auto) finding("read_color returned encoding Auto");

@@ -106,10 +106,18 @@ BatchLayout pick_layout(FuzzedDataProvider& in) {
 
 SolveOptions pick_options(FuzzedDataProvider& in) {
   // 1024 is solve.hpp's kMaxThreads, the most a call accepts.
-  constexpr int kThreads[] = {0, 1, 2, 3, 4, -1, 1024, 1025, std::numeric_limits<int>::max(),
+  constexpr int kThreads[] = {0,
+                              1,
+                              2,
+                              3,
+                              4,
+                              -1,
+                              1024,
+                              1025,
+                              std::numeric_limits<int>::max(),
                               std::numeric_limits<int>::min()};
-  constexpr Index kPcrBelow[] = {32, 0, 1, 2, 3, -1, std::numeric_limits<Index>::max(),
-                                 std::numeric_limits<Index>::min()};
+  constexpr Index kPcrBelow[] = {
+      32, 0, 1, 2, 3, -1, std::numeric_limits<Index>::max(), std::numeric_limits<Index>::min()};
   SolveOptions options;
   // Past the last enumerator too: an enum class holds any int.
   options.method = static_cast<Method>(in.ConsumeIntegralInRange(-1, 7));
@@ -126,10 +134,10 @@ enum class Alias { None, InPlace, Sub, Diag, Super, Beta };
 struct Call {
   BatchLayout layout;
   SolveOptions options;
-  bool diffusion;     // solve_diffusion rather than solve
-  bool dominant;      // raise the diagonal (or |beta|) so that most systems are solvable
+  bool diffusion;  // solve_diffusion rather than solve
+  bool dominant;   // raise the diagonal (or |beta|) so that most systems are solvable
   Alias alias;
-  unsigned nulls;     // null pointers passed: bit 0 sub and beta, 1 diag, 2 super, 3 rhs, 4 x
+  unsigned nulls;  // null pointers passed: bit 0 sub and beta, 1 diag, 2 super, 3 rhs, 4 x
 };
 
 Call pick_call(FuzzedDataProvider& in) {
@@ -165,9 +173,21 @@ std::string describe(const Call& call, const char* scalar) {
 template <class R>
 R special_value(int k) {
   using L = std::numeric_limits<R>;
-  const R table[] = {R(0),         -R(0),        R(1),          R(-1),       R(0.5),
-                     R(4),         R(-3),        L::quiet_NaN(), L::infinity(), -L::infinity(),
-                     R(1e38),      R(-1e38),     L::denorm_min(), L::min(),     L::max(),
+  const R table[] = {R(0),
+                     -R(0),
+                     R(1),
+                     R(-1),
+                     R(0.5),
+                     R(4),
+                     R(-3),
+                     L::quiet_NaN(),
+                     L::infinity(),
+                     -L::infinity(),
+                     R(1e38),
+                     R(-1e38),
+                     L::denorm_min(),
+                     L::min(),
+                     L::max(),
                      L::epsilon()};
   return table[k % std::size(table)];
 }
@@ -202,8 +222,10 @@ T next_value(FuzzedDataProvider& in, real_t<T> fallback) {
 template <class T>
 T gap_marker() {
   const auto nan = std::numeric_limits<real_t<T>>::quiet_NaN();
-  if constexpr (is_complex_v<T>) return T(nan, -nan);
-  else return -nan;
+  if constexpr (is_complex_v<T>)
+    return T(nan, -nan);
+  else
+    return -nan;
 }
 
 template <class T>
@@ -368,8 +390,8 @@ std::string text(const Wide& v) {
 
 // Rows "sub diag super | rhs -> x" of system s, for the report of a wrong solution.
 template <class T>
-std::string dump_system(Batch<T>& b, const Call& call, const std::vector<T>& rhs,
-                        const T* solution, Index s) {
+std::string dump_system(Batch<T>& b, const Call& call, const std::vector<T>& rhs, const T* solution,
+                        Index s) {
   std::string dump;
   for (Index i = 0; i < b.layout.n; ++i) {
     Wide row[3];
@@ -453,8 +475,8 @@ void check_system_unchanged(const std::vector<T>& after, const std::vector<T>& b
   for (Index i = 0; i < layout.n; ++i) {
     const Index o = layout.offset(s, i);
     if (!same_bits(after[o], before[o]))
-      finding("failed in-place solve changed rhs of the failed system at row " +
-              std::to_string(i) + ": " + error);
+      finding("failed in-place solve changed rhs of the failed system at row " + std::to_string(i) +
+              ": " + error);
   }
 }
 
@@ -470,8 +492,8 @@ struct Pointers {
 
 template <class T>
 Pointers<T> pointers(Batch<T>& b, const Call& call) {
-  Pointers<T> p{b.sub.data(), b.diag.data(), b.super.data(), b.rhs.data(), b.beta.data(),
-                b.x.data()};
+  Pointers<T> p{b.sub.data(), b.diag.data(), b.super.data(),
+                b.rhs.data(), b.beta.data(), b.x.data()};
   switch (call.alias) {
     case Alias::None: break;
     case Alias::InPlace: p.x = b.rhs.data(); break;
@@ -547,8 +569,8 @@ void check_solution(Batch<T>& b, const Batch<T>& before, const Call& call,
   for (Index s = 0; s < b.layout.count; ++s)
     for (Index i = 0; i < b.layout.n; ++i)
       if (!detail::is_finite(solution(s, i)))
-        finding("returned normally with a non-finite x at system " + std::to_string(s) +
-                ", row " + std::to_string(i));
+        finding("returned normally with a non-finite x at system " + std::to_string(s) + ", row " +
+                std::to_string(i));
   for (const Index s : posed) check_residual(b, call, before.rhs, x, s);
 }
 

@@ -55,8 +55,8 @@ System<T> random_dominant(std::ptrdiff_t n, std::uint64_t seed, bool periodic = 
     s.c[i] = (i + 1 < n || periodic) ? random_scalar<T>(random, -1, 1) : T(0);
     const T direction = random_scalar<T>(random, -1, 1);
     const real_t<T> size = static_cast<real_t<T>>(magnitude(direction));
-    const real_t<T> needed = static_cast<real_t<T>>(magnitude(s.a[i]) + magnitude(s.c[i])) +
-                             1 + std::uniform_real_distribution<real_t<T>>(0, 1)(random);
+    const real_t<T> needed = static_cast<real_t<T>>(magnitude(s.a[i]) + magnitude(s.c[i])) + 1 +
+                             std::uniform_real_distribution<real_t<T>>(0, 1)(random);
     s.b[i] = size > 0 ? direction * (needed / size) : T(needed);
     s.d[i] = random_scalar<T>(random, -1, 1);
   }
@@ -173,8 +173,8 @@ template <class T>
 std::vector<T> solve_system(const System<T>& s, SolveOptions options) {
   options.periodic = s.periodic;
   std::vector<T> x(s.n());
-  solve(s.a.data(), s.b.data(), s.c.data(), s.d.data(), x.data(),
-        BatchLayout::single(s.n()), options);
+  solve(s.a.data(), s.b.data(), s.c.data(), s.d.data(), x.data(), BatchLayout::single(s.n()),
+        options);
   return x;
 }
 

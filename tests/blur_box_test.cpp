@@ -131,8 +131,8 @@ TEST(TiledFloatSummedAreaTable, PrecisionOnWideImages) {
   std::uniform_real_distribution<float> unit(0, 1);
   const Image constant = testing_util::make_image(w, h, 1, [](auto, auto, int) { return 0.7f; });
   const Image noise = testing_util::make_image(w, h, 1, [&](auto, auto, int) { return unit(rng); });
-  const Image halves =
-      testing_util::make_image(w, h, 1, [&](auto x, auto, int) { return x < w / 2 ? 0.15f : 0.85f; });
+  const Image halves = testing_util::make_image(
+      w, h, 1, [&](auto x, auto, int) { return x < w / 2 ? 0.15f : 0.85f; });
   const double bound = 4 * 1024 * std::ldexp(1.0, -24);
   for (const Image* image : {&constant, &noise, &halves}) {
     const ConstPlane in = image->plane(0);
@@ -153,7 +153,8 @@ TEST(TiledFloatSummedAreaTable, PrecisionOnWideImages) {
       const std::ptrdiff_t x0 = px(rng), y0 = py(rng), side = 1 + k % 9 * 4;
       const std::ptrdiff_t x1 = x0 + side - 1, y1 = y0 + side - 1;
       const double truth = exact.replicate_box_sum(x0, y0, x1, y1);
-      tiled_worst = std::max(tiled_worst, std::abs(tiled.replicate_box_sum(x0, y0, x1, y1) - truth));
+      tiled_worst =
+          std::max(tiled_worst, std::abs(tiled.replicate_box_sum(x0, y0, x1, y1) - truth));
       const auto n = [&](std::ptrdiff_t x, std::ptrdiff_t y) { return double(naive[y * w + x]); };
       const double naive_sum = n(x1, y1) - n(x0 - 1, y1) - n(x1, y0 - 1) + n(x0 - 1, y0 - 1);
       naive_worst = std::max(naive_worst, std::abs(naive_sum - truth));
@@ -340,8 +341,7 @@ TEST(BoxMethods, RegisteredMaxErrorHolds) {
       }
       // The bound over every image, not just these patterns.
       if (sigma <= 8) {
-        EXPECT_LE(0.5 * operator_norm_error(plane_blur(method, settings), sigma),
-                  method.max_error)
+        EXPECT_LE(0.5 * operator_norm_error(plane_blur(method, settings), sigma), method.max_error)
             << name << " sigma " << sigma;
       }
     }
@@ -362,8 +362,8 @@ TEST(BoxMethods, EffectiveSigmaMatchesTablesA6A7) {
     int passes;
     double table;
   };
-  const Case cases[] = {{9, 1, 2.875}, {9, 2, 3.754808}, {9, 3, 4.586538}, {9, 4, 5.25},
-                        {3, 3, 1.5},   {3, 4, 1.75}};
+  const Case cases[] = {{9, 1, 2.875}, {9, 2, 3.754808}, {9, 3, 4.586538},
+                        {9, 4, 5.25},  {3, 3, 1.5},      {3, 4, 1.75}};
   for (const Case& c : cases) {
     const std::vector<BoxPass> passes(c.passes, BoxPass{(c.width - 1) / 2, 0});
     const PlaneBlur blur_plane = [&](Plane out, ConstPlane in) { box_passes(out, in, passes); };
@@ -387,15 +387,13 @@ TEST(BoxMethods, BadArguments) {
   Image out(8, 8, 1);
   EXPECT_EQ(invalid_argument_of([&] { sat_box_filter(out.plane(0), table, -1, 1); }).argument,
             "radius");
-  EXPECT_EQ(invalid_argument_of([&] { SummedAreaTable(image.plane(0), -1); }).argument,
-            "threads");
+  EXPECT_EQ(invalid_argument_of([&] { SummedAreaTable(image.plane(0), -1); }).argument, "threads");
   const std::vector<BoxPass> bad{{-1, 0}};
   EXPECT_EQ(invalid_argument_of([&] { box_passes(out.plane(0), image.plane(0), bad); }).argument,
             "passes");
   for (const char* name : {"box", "box-extended", "box-sat"})
     EXPECT_EQ(invalid_argument_of([&] {
-                blur(out.plane(0), image.plane(0), find_blur_method(name),
-                     {4, Border::zero, 1});
+                blur(out.plane(0), image.plane(0), find_blur_method(name), {4, Border::zero, 1});
               }).argument,
               "border");
 }

@@ -25,8 +25,7 @@ namespace {
 using testing_util::contains;
 using testing_util::invalid_argument_of;
 
-constexpr Border kBorders[] = {Border::replicate, Border::mirror, Border::zero,
-                               Border::periodic};
+constexpr Border kBorders[] = {Border::replicate, Border::mirror, Border::zero, Border::periodic};
 
 // ---- helpers ----------------------------------------------------------------------------
 
@@ -47,7 +46,8 @@ std::vector<float> random_kernel(std::ptrdiff_t size, unsigned seed) {
 
 // The definition, in double: out(x, y) = sum_{i,j} k(i, j) in(x + i - rx, y + j - ry), pixels
 // outside read through border_index (-1: zero).
-DoublePlane brute_force(ConstPlane in, const std::function<double(std::ptrdiff_t, std::ptrdiff_t)>& k,
+DoublePlane brute_force(ConstPlane in,
+                        const std::function<double(std::ptrdiff_t, std::ptrdiff_t)>& k,
                         std::ptrdiff_t kw, std::ptrdiff_t kh, Border border) {
   const std::ptrdiff_t w = in.width(), h = in.height(), rx = kw / 2, ry = kh / 2;
   DoublePlane out(w, h);
@@ -70,8 +70,8 @@ DoublePlane brute_force(ConstPlane in, const std::function<double(std::ptrdiff_t
 DoublePlane brute_force_separable(ConstPlane in, const std::vector<float>& kx,
                                   const std::vector<float>& ky, Border border) {
   return brute_force(
-      in, [&](std::ptrdiff_t i, std::ptrdiff_t j) { return double(kx[i]) * ky[j]; },
-      std::ssize(kx), std::ssize(ky), border);
+      in, [&](std::ptrdiff_t i, std::ptrdiff_t j) { return double(kx[i]) * ky[j]; }, std::ssize(kx),
+      std::ssize(ky), border);
 }
 
 double max_abs_difference(ConstPlane a, const DoublePlane& b) {
@@ -82,7 +82,9 @@ double max_abs_difference(ConstPlane a, const DoublePlane& b) {
   return worst;
 }
 
-double max_abs_difference(ConstPlane a, ConstPlane b) { return max_abs_difference(a, to_double(b)); }
+double max_abs_difference(ConstPlane a, ConstPlane b) {
+  return max_abs_difference(a, to_double(b));
+}
 
 // ---- kernels ----------------------------------------------------------------------------
 
@@ -212,8 +214,9 @@ void expect_matches_brute_force_separable(SeparableConvolution convolve, double 
         const Image in = random_image(size.w, size.h, 3);
         Image out(size.w, size.h, 1);
         convolve(out.plane(0), in.plane(0), kx, ky, border, 1);
-        EXPECT_LE(max_abs_difference(out.plane(0), brute_force_separable(in.plane(0), kx, ky, border)),
-                  tolerance);
+        EXPECT_LE(
+            max_abs_difference(out.plane(0), brute_force_separable(in.plane(0), kx, ky, border)),
+            tolerance);
       }
 }
 
@@ -260,8 +263,8 @@ TEST(Convolution, AViewInsideALargerPlaneReadsAndWritesOnlyItsRectangle) {
   Image in = random_image(40, 30, 5), out(40, 30, 1);
   const Rect area{3, 2, 21, 19};
   const std::vector<float> kx = random_kernel(5, 1), ky = random_kernel(7, 2);
-  for (auto convolve : {SeparableConvolution(convolve_separable),
-                        SeparableConvolution(fft_convolve_separable)}) {
+  for (auto convolve :
+       {SeparableConvolution(convolve_separable), SeparableConvolution(fft_convolve_separable)}) {
     std::fill_n(out.data(), out.plane_stride(), -1.f);
     convolve(out.plane(0).sub(area), in.plane(0).sub(area), kx, ky, Border::mirror, 2);
     const DoublePlane expected =
@@ -314,8 +317,7 @@ TEST(Convolution, OneAndTwoThreadsGiveTheSameResult) {
     for (const auto& [row_kernel, column_kernel] : {std::pair{kx, ky}, std::pair{ky, kx}}) {
       convolve_separable(one.plane(0), in.plane(0), row_kernel, column_kernel, border, 1);
       for (int threads : {2, 3}) {
-        convolve_separable(two.plane(0), in.plane(0), row_kernel, column_kernel, border,
-                           threads);
+        convolve_separable(two.plane(0), in.plane(0), row_kernel, column_kernel, border, threads);
         EXPECT_EQ(max_abs_difference(one.plane(0), two.plane(0)), 0.0) << threads << " threads";
       }
     }
@@ -337,8 +339,8 @@ TEST(Convolution, BadKernelsAndPlanesAreInvalidArgumentsNamingTheArgument) {
   const std::vector<float> nan{0.f, std::nanf(""), 0.f};
   const Kernel2D good2d = outer_product(good, good);
   const Kernel2D even2d{2, 3, {0, 0, 0, 0, 0, 0}}, empty2d{}, short2d{3, 3, {1.f}};
-  for (auto convolve : {SeparableConvolution(convolve_separable),
-                        SeparableConvolution(fft_convolve_separable)}) {
+  for (auto convolve :
+       {SeparableConvolution(convolve_separable), SeparableConvolution(fft_convolve_separable)}) {
     auto run = [&](std::span<const float> kx, std::span<const float> ky, Plane o, int threads) {
       return invalid_argument_of([&] { convolve(o, in.plane(0), kx, ky, Border::zero, threads); });
     };
@@ -364,7 +366,8 @@ TEST(Convolution, BadKernelsAndPlanesAreInvalidArgumentsNamingTheArgument) {
   }
   for (auto convolve : {Convolution2D(convolve_2d), Convolution2D(fft_convolve)}) {
     auto run = [&](const Kernel2D& k) {
-      return invalid_argument_of([&] { convolve(out.plane(0), in.plane(0), k, Border::mirror, 1); });
+      return invalid_argument_of(
+          [&] { convolve(out.plane(0), in.plane(0), k, Border::mirror, 1); });
     };
     EXPECT_EQ(run(even2d).argument, "kernel");
     EXPECT_TRUE(contains(run(even2d).message, "odd"));
@@ -379,8 +382,9 @@ TEST(Convolution, BadKernelsAndPlanesAreInvalidArgumentsNamingTheArgument) {
   EXPECT_EQ(invalid_argument_of([] { triangle_kernel(0); }).argument, "size");
   EXPECT_EQ(invalid_argument_of([] { gaussian_kernel(0.0); }).argument, "sigma");
   EXPECT_EQ(invalid_argument_of([] { gaussian_radius(NAN); }).argument, "sigma");
-  EXPECT_EQ(invalid_argument_of([] { outer_product(std::vector<float>{1, 1}, std::vector<float>{1}); })
-                .argument,
+  EXPECT_EQ(invalid_argument_of([] {
+              outer_product(std::vector<float>{1, 1}, std::vector<float>{1});
+            }).argument,
             "kx");
 }
 

@@ -61,8 +61,8 @@ TEST(BlurPyramid, StoredSigmaTableMatchesSeedTablesA1ToA3) {
       const double ours = pyramid_sigma(seed.filter, levels);
       const double theirs = seed.sigma[levels - 1];
       EXPECT_NEAR(ours, theirs, seed_tolerance(theirs))
-          << "Table " << seed.table << ", " << pyramid_filter_name(seed.filter) << ", "
-          << levels << " levels";
+          << "Table " << seed.table << ", " << pyramid_filter_name(seed.filter) << ", " << levels
+          << " levels";
     }
 }
 
@@ -76,8 +76,8 @@ TEST(BlurPyramid, MeasuredSigmaMatchesSeedTablesA1ToA3) {
       const double sigma = measured_sigma(seed.filter, levels, 96);
       const double theirs = seed.sigma[levels - 1];
       EXPECT_NEAR(sigma, theirs, seed_tolerance(theirs))
-          << "Table " << seed.table << ", " << pyramid_filter_name(seed.filter) << ", "
-          << levels << " levels";
+          << "Table " << seed.table << ", " << pyramid_filter_name(seed.filter) << ", " << levels
+          << " levels";
       // Smaller patterns hold fewer phases of each edge against the coarse grid; the 2x2 box,
       // the least shift-invariant, moves most (per-pattern fits spread by +-7%).
       const double stored = pyramid_sigma(seed.filter, levels);
@@ -153,9 +153,9 @@ Image random_image(std::ptrdiff_t w, std::ptrdiff_t h, unsigned seed, float lo =
 struct Size2 {
   std::ptrdiff_t w, h;
 };
-constexpr Size2 kOddSizes[] = {{1, 1},  {2, 2},  {3, 3},   {17, 17}, {33, 33}, {31, 31},
-                               {65, 65}, {63, 1}, {1, 33},  {2, 17},  {17, 3},  {129, 31},
-                               {33, 64}, {5, 127}, {64, 64}};
+constexpr Size2 kOddSizes[] = {{1, 1},   {2, 2},    {3, 3},   {17, 17}, {33, 33},
+                               {31, 31}, {65, 65},  {63, 1},  {1, 33},  {2, 17},
+                               {17, 3},  {129, 31}, {33, 64}, {5, 127}, {64, 64}};
 
 TEST(BlurPyramid, ConstantImageStaysConstant) {
   for (const Size2 s : kOddSizes)
@@ -210,13 +210,13 @@ TEST(BlurPyramid, BordersAreExactlyTheReplicateExtension) {
         };
         const Image padded = make_image(w + left + right, h + left + right, 1, clamped);
         Image padded_out(padded.width(), padded.height(), 1);
-        pyramid_blur(padded_out.plane(0), padded.plane(0), filter, levels, 0.9,
-                     Border::replicate, 0);
+        pyramid_blur(padded_out.plane(0), padded.plane(0), filter, levels, 0.9, Border::replicate,
+                     0);
         for (std::ptrdiff_t y = 0; y < h; ++y)
           for (std::ptrdiff_t x = 0; x < w; ++x)
             ASSERT_NEAR(padded_out(x + left, y + left, 0), out(x, y, 0), 1e-6)
-                << pyramid_filter_name(filter) << ", " << levels << " levels, pad " << left
-                << "/" << right << ", at " << x << ", " << y;
+                << pyramid_filter_name(filter) << ", " << levels << " levels, pad " << left << "/"
+                << right << ", at " << x << ", " << y;
       }
     }
 }
@@ -240,8 +240,7 @@ TEST(BlurPyramid, MassOfContentAwayFromEdgesIsConserved) {
     for (int levels : {1, 2, 3}) {
       Image out(w, h, 1);
       pyramid_blur(out.plane(0), in.plane(0), filter, levels, 0.6, Border::replicate, 0);
-      EXPECT_NEAR(plane_sum(out.plane(0)), plane_sum(in.plane(0)),
-                  1e-6 * plane_sum(in.plane(0)))
+      EXPECT_NEAR(plane_sum(out.plane(0)), plane_sum(in.plane(0)), 1e-6 * plane_sum(in.plane(0)))
           << pyramid_filter_name(filter) << ", " << levels << " levels";
     }
 }
@@ -350,18 +349,17 @@ TEST(BlurPyramid, RejectsBadArguments) {
             }),
             "border");
   EXPECT_EQ(argument([&] {
-              pyramid_blur(b.plane(0), a.plane(0), PyramidFilter::box2, 1, -0.5,
-                           Border::replicate, 0);
+              pyramid_blur(b.plane(0), a.plane(0), PyramidFilter::box2, 1, -0.5, Border::replicate,
+                           0);
             }),
             "coarse_sigma");
   EXPECT_EQ(argument([&] {
-              pyramid_blur(b.plane(0), a.plane(0), PyramidFilter::box2, 1, NAN,
-                           Border::replicate, 0);
+              pyramid_blur(b.plane(0), a.plane(0), PyramidFilter::box2, 1, NAN, Border::replicate,
+                           0);
             }),
             "coarse_sigma");
   EXPECT_EQ(argument([&] {
-              pyramid_blur(b.plane(0), a.plane(0), PyramidFilter::box4, 1, Border::replicate,
-                           -1);
+              pyramid_blur(b.plane(0), a.plane(0), PyramidFilter::box4, 1, Border::replicate, -1);
             }),
             "threads");
   EXPECT_EQ(argument([] { pyramid_sigma(PyramidFilter::quasi, 0); }), "levels");

@@ -43,8 +43,8 @@ std::vector<double> tent_samples(const SpreadingKernel& k) {
 // Brute-force convolution in double with a width x height kernel (centred, index (j, i) ->
 // j * width + i), reading outside pixels through border_index: every output pixel, borders
 // included, from its definition.
-DoublePlane brute_convolve(ConstPlane in, const std::vector<double>& kernel,
-                           std::ptrdiff_t width, std::ptrdiff_t height, Border border) {
+DoublePlane brute_convolve(ConstPlane in, const std::vector<double>& kernel, std::ptrdiff_t width,
+                           std::ptrdiff_t height, Border border) {
   const std::ptrdiff_t cx = width / 2, cy = height / 2, w = in.width(), h = in.height();
   DoublePlane out(w, h);
   for (std::ptrdiff_t y = 0; y < h; ++y)
@@ -131,8 +131,7 @@ TEST(Spreading, SigmaMapsToATentOfTheScaledSigma) {
     EXPECT_GE(k.radius, 1);
     EXPECT_GE(k.blend, 0.0);
     EXPECT_LE(k.blend, 1.0);
-    EXPECT_NEAR(std::sqrt(spreading_variance(k)), kTentSigmaScale * sigma, 1e-9 * sigma)
-        << sigma;
+    EXPECT_NEAR(std::sqrt(spreading_variance(k)), kTentSigmaScale * sigma, 1e-9 * sigma) << sigma;
   }
   // The half-width follows sqrt(6 s^2 + 1), s = 0.96 sigma: sigma 8 -> 7.68 -> r = 18.84.
   EXPECT_EQ(spreading_kernel_for_sigma(8).radius, 18);
@@ -140,7 +139,7 @@ TEST(Spreading, SigmaMapsToATentOfTheScaledSigma) {
 
 TEST(Spreading, ImpulseResponseIsTheTensorTent) {
   for (const SpreadingKernel k : {SpreadingKernel{1, 0.0}, SpreadingKernel{2, 0.4},
-                                   SpreadingKernel{7, 0.0}, SpreadingKernel{12, 0.75}}) {
+                                  SpreadingKernel{7, 0.0}, SpreadingKernel{12, 0.75}}) {
     const std::ptrdiff_t n = 2 * k.radius + 9, c = n / 2;
     const Image in = impulse_image(n, n, c, c);
     Image out(n, n, 1);
@@ -166,22 +165,19 @@ TEST(Spreading, EveryPixelMatchesBruteForceIncludingBorders) {
         polynomial_spread(out.plane(0), in.plane(0), k, border, 2);
         const DoublePlane expected = brute_separable(in.plane(0), tent_samples(k), border);
         EXPECT_LT(max_difference(out.plane(0), expected), 2e-6)
-            << size.w << " x " << size.h << " radius " << k.radius << " "
-            << border_name(border);
+            << size.w << " x " << size.h << " radius " << k.radius << " " << border_name(border);
       }
 }
 
 TEST(Spreading, ConstantImageStaysConstant) {
   for (const Size size : {Size{1, 1}, Size{5, 3}, Size{64, 48}})
     for (double sigma : {0.5, 3.0, 40.0, 1000.0}) {
-      const Image in = testing_util::make_image(size.w, size.h, 1, [](auto, auto, int) {
-        return 0.7f;
-      });
+      const Image in =
+          testing_util::make_image(size.w, size.h, 1, [](auto, auto, int) { return 0.7f; });
       Image out(size.w, size.h, 1);
       blur(out.plane(0), in.plane(0), find_blur_method("kosloff"), {sigma, Border::replicate, 1});
       for (std::ptrdiff_t y = 0; y < size.h; ++y)
-        for (std::ptrdiff_t x = 0; x < size.w; ++x)
-          ASSERT_NEAR(out(x, y, 0), 0.7f, 1e-6) << sigma;
+        for (std::ptrdiff_t x = 0; x < size.w; ++x) ASSERT_NEAR(out(x, y, 0), 0.7f, 1e-6) << sigma;
     }
 }
 
@@ -223,9 +219,8 @@ TEST(Spreading, RegisteredEffectiveSigmaIsTheTarget) {
   const std::vector<TestPattern> patterns = quality_test_set(64);
   const BlurMethod& method = find_blur_method("kosloff");
   for (double sigma : {2.0, 4.0, 8.0}) {
-    const double fitted =
-        effective_sigma(plane_blur(method, {sigma, Border::replicate, 1}), patterns,
-                        0.7 * sigma, 1.3 * sigma);
+    const double fitted = effective_sigma(plane_blur(method, {sigma, Border::replicate, 1}),
+                                          patterns, 0.7 * sigma, 1.3 * sigma);
     EXPECT_NEAR(fitted, sigma, 0.02 * sigma);
   }
 }
@@ -247,8 +242,7 @@ TEST(SpreadingAndReshuffle, RegisteredMaxErrorHolds) {
       for (const TestPattern& p : patterns) {
         Image out(64, 64, 1);
         blur(out.plane(0), p.image.plane(0), method, settings);
-        const DoublePlane exact =
-            reference_gaussian(p.image.plane(0), sigma, Border::replicate, 1);
+        const DoublePlane exact = reference_gaussian(p.image.plane(0), sigma, Border::replicate, 1);
         worst = std::max(worst, blur_error(out.plane(0), exact).max_abs);
       }
       EXPECT_LE(worst, method.max_error) << name << " sigma " << sigma;
@@ -454,11 +448,11 @@ TEST(SpreadingAndReshuffle, BadInputNamesTheArgument) {
             }).argument,
             "threads");
   // Through the registry: kosloff has no mirror border, reshuffle no sigma above 64.
-  EXPECT_EQ(invalid_argument_of([&] {
-              blur(out.plane(0), in.plane(0), find_blur_method("kosloff"),
-                   {2.0, Border::mirror, 0});
-            }).argument,
-            "border");
+  EXPECT_EQ(
+      invalid_argument_of([&] {
+        blur(out.plane(0), in.plane(0), find_blur_method("kosloff"), {2.0, Border::mirror, 0});
+      }).argument,
+      "border");
   EXPECT_EQ(invalid_argument_of([&] {
               blur(out.plane(0), in.plane(0), find_blur_method("reshuffle"),
                    {100.0, Border::replicate, 0});

@@ -72,8 +72,8 @@ TEST(BlurReference, MatchesBruteForce2DSumForEveryBorder) {
       const DoublePlane out = reference_gaussian(image.plane(0), sigma, border, 2);
       for (std::ptrdiff_t y = 0; y < 9; ++y)
         for (std::ptrdiff_t x = 0; x < 13; ++x)
-          ASSERT_NEAR(out(x, y), static_cast<double>(brute_gaussian(image.plane(0), x, y,
-                                                                    sigma, border)),
+          ASSERT_NEAR(out(x, y),
+                      static_cast<double>(brute_gaussian(image.plane(0), x, y, sigma, border)),
                       1e-14)
               << border_name(border) << " sigma " << sigma << " at " << x << ", " << y;
     }
@@ -138,8 +138,7 @@ TEST(BlurQuality, EffectiveSigmaOfTwoGaussiansInARow) {
     const DoublePlane first = reference_gaussian(in, 1.5, Border::replicate);
     const DoublePlane second = reference_gaussian(first, 2.0, Border::replicate);
     for (std::ptrdiff_t y = 0; y < in.height(); ++y)
-      for (std::ptrdiff_t x = 0; x < in.width(); ++x)
-        out(x, y) = static_cast<float>(second(x, y));
+      for (std::ptrdiff_t x = 0; x < in.width(); ++x) out(x, y) = static_cast<float>(second(x, y));
   };
   EXPECT_NEAR(effective_sigma(twice, set, 1.0, 5.0), 2.5, 2e-3);
 }
@@ -327,7 +326,8 @@ TEST(BlurDiffusion, WithinTheStatedErrorOfTheInsulatedGaussian) {
 
 TEST(BlurImage, EveryChannelIsBlurredAndOutIsSized) {
   const BlurMethod& method = find_blur_method("iir-deriche");
-  const Image in = make_image(20, 10, 3, [](auto x, auto, int c) { return c == 1 ? x / 20.f : 0.f; });
+  const Image in =
+      make_image(20, 10, 3, [](auto x, auto, int c) { return c == 1 ? x / 20.f : 0.f; });
   Image out;
   blur(out, in, method, {2.0});
   ASSERT_EQ(out.width(), 20);

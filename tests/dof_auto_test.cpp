@@ -161,7 +161,8 @@ TEST(DofAuto, RunsTheChosenMethodAndSaysSo) {
   EXPECT_NE(report.notes.find("Chose " + report.chosen_method), std::string::npos);
   Image direct;
   DofReport direct_report;
-  direct_report = depth_of_field(direct, color, coc.plane(0), find_dof_method(report.chosen_method), {});
+  direct_report =
+      depth_of_field(direct, color, coc.plane(0), find_dof_method(report.chosen_method), {});
   for (int c = 0; c < 3; ++c)
     for (std::ptrdiff_t y = 0; y < 100; ++y)
       for (std::ptrdiff_t x = 0; x < 100; ++x)

@@ -184,8 +184,8 @@ Image seed_reference(const Image& color, const Image& coc, float in_focus = 1.f)
         double ring = 0;
         for (const auto& p : pinwheel)
           ring += color(mirror_index(x + p[0], W), mirror_index(y + p[1], H), ch) / 17;
-        const double blended = wy * ring + wz * upsample(medium[ch], x, y) +
-                               ww * upsample(large[ch], x, y);
+        const double blended =
+            wy * ring + wz * upsample(medium[ch], x, y) + ww * upsample(large[ch], x, y);
         out(x, y, ch) = float((1 - alpha) * color(x, y, ch) + blended);
       }
     }
@@ -216,10 +216,10 @@ TEST(GemsDof, MatchesSeedListingsInDouble) {
     float scale, in_focus;
     bool far_only = false;
   };
-  for (const Case k : {Case{203, 157, 22.f, 1.f}, Case{61, 37, 60.f, 1.f}, Case{17, 5, 22.f, 1.f},
-                       Case{2, 3, 22.f, 1.f}, Case{1, 1, 22.f, 1.f}, Case{90, 66, 9.f, 3.f},
-                       Case{90, 66, 4.f, 1.f}, Case{33, 21, 1200.f, 1.f},
-                       Case{101, 79, 30.f, 1.f, true}}) {
+  for (const Case k :
+       {Case{203, 157, 22.f, 1.f}, Case{61, 37, 60.f, 1.f}, Case{17, 5, 22.f, 1.f},
+        Case{2, 3, 22.f, 1.f}, Case{1, 1, 22.f, 1.f}, Case{90, 66, 9.f, 3.f},
+        Case{90, 66, 4.f, 1.f}, Case{33, 21, 1200.f, 1.f}, Case{101, 79, 30.f, 1.f, true}}) {
     Image color = random_image(k.width, k.height, 3, 0.f, 1.f, 7);
     color(0, 0, 0) = 40.f;
     color(k.width / 2, k.height / 2, 2) = 25.f;
@@ -294,8 +294,8 @@ TEST(GemsDof, CloseToScatterUnderUniformCoc) {
     float diameter;
     double rmse, max;
   };
-  for (const Bound b : {Bound{8.f, 1.5 * 0.0059, 1.5 * 0.034}, Bound{-20.f, 1.5 * 0.0192,
-                                                                       1.5 * 0.106}}) {
+  for (const Bound b :
+       {Bound{8.f, 1.5 * 0.0059, 1.5 * 0.034}, Bound{-20.f, 1.5 * 0.0192, 1.5 * 0.106}}) {
     const Image coc = make_coc(width, height, [&](auto, auto) { return b.diameter; });
     const Result r = run(color, coc);
     Image slow;
@@ -312,8 +312,8 @@ TEST(GemsDof, CloseToScatterUnderUniformCoc) {
     const double worst = image_difference(r.out, slow).max;
     EXPECT_LE(rmse, b.rmse) << "D " << b.diameter;
     EXPECT_LE(worst, b.max) << "D " << b.diameter;
-    std::printf("[ measured ] uniform D=%g vs scatter: RMSE %.4f, max %.4f\n",
-                double(b.diameter), rmse, worst);
+    std::printf("[ measured ] uniform D=%g vs scatter: RMSE %.4f, max %.4f\n", double(b.diameter),
+                rmse, worst);
   }
 }
 
@@ -432,8 +432,8 @@ TEST(GemsDof, NearCocSpreadsOverSharpBackground) {
   });
   const Result r = run(color, coc);
   auto distance = [](std::ptrdiff_t x, std::ptrdiff_t y) {
-    return std::max({std::ptrdiff_t(60) - x, x - 99, std::ptrdiff_t(60) - y, y - 99,
-                     std::ptrdiff_t(0)});
+    return std::max(
+        {std::ptrdiff_t(60) - x, x - 99, std::ptrdiff_t(60) - y, y - 99, std::ptrdiff_t(0)});
   };
   std::vector<double> ring(40, 0.0);
   std::vector<int> count(40, 0);
@@ -456,8 +456,10 @@ TEST(GemsDof, NearCocSpreadsOverSharpBackground) {
   EXPECT_GT(ring[4], ring[8]);
   EXPECT_LT(ring[30], 0.01);
   EXPECT_EQ(far_moved, 0);
-  std::printf("[ measured ] near square D=-16: red excess at 1, 2, 4, 8, 16 px: %.3f %.3f %.3f "
-              "%.3f %.4f\n", ring[1], ring[2], ring[4], ring[8], ring[16]);
+  std::printf(
+      "[ measured ] near square D=-16: red excess at 1, 2, 4, 8, 16 px: %.3f %.3f %.3f "
+      "%.3f %.4f\n",
+      ring[1], ring[2], ring[4], ring[8], ring[16]);
 }
 
 // Radii above 256 px are clamped: a uniform CoC of 600 px and one of 60000 px give the same bits

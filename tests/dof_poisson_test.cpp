@@ -103,8 +103,8 @@ TEST(DofPoisson, ConstantStaysConstantForAnyCoc) {
             for (std::ptrdiff_t x = 0; x < w; ++x) {
               const double rel = std::fabs(double(out(x, y, c)) - value) / std::fabs(value);
               worst = std::max(worst, rel);
-              ASSERT_LE(rel, 1e-5) << w << " x " << h << " CoC scale " << scale << " at (" << x
-                                   << ", " << y << ")";
+              ASSERT_LE(rel, 1e-5)
+                  << w << " x " << h << " CoC scale " << scale << " at (" << x << ", " << y << ")";
             }
       }
   std::printf("[ measured ] constant: worst relative change %.3g\n", worst);
@@ -218,10 +218,11 @@ TEST(DofPoisson, ProceduralSceneCloseToScatter) {
   const Image reference = run(scatter(), scene.color, coc);
   auto t2 = Clock::now();
   const auto e = image_difference(gathered, reference);
-  std::printf("[ measured ] scene %tdx%td vs scatter: RMSE %.4f, max %.4f; poisson %.3f s, "
-              "scatter %.3f s\n",
-              w, h, e.rmse, e.max, std::chrono::duration<double>(t1 - t0).count(),
-              std::chrono::duration<double>(t2 - t1).count());
+  std::printf(
+      "[ measured ] scene %tdx%td vs scatter: RMSE %.4f, max %.4f; poisson %.3f s, "
+      "scatter %.3f s\n",
+      w, h, e.rmse, e.max, std::chrono::duration<double>(t1 - t0).count(),
+      std::chrono::duration<double>(t2 - t1).count());
   // Measured RMSE 0.0246, max 1.78 (colour up to ~20 at highlights; the max is at the edge of
   // a blurred near object over sharp background, the stated limitation); bounds 1.5x.
   EXPECT_LT(e.rmse, 0.037);
@@ -246,9 +247,10 @@ TEST(DofPoisson, SharpNeighbourDoesNotBleedIntoBlur) {
         EXPECT_EQ(reference(x, y, 0), 0.f);
       }
     }
-  std::printf("[ measured ] sharp line 50 into CoC 12: max leak at distance 1,2,3,4,8: %.4f %.4f "
-              "%.4f %.4f %.4f\n",
-              leak[1], leak[2], leak[3], leak[4], leak[8]);
+  std::printf(
+      "[ measured ] sharp line 50 into CoC 12: max leak at distance 1,2,3,4,8: %.4f %.4f "
+      "%.4f %.4f %.4f\n",
+      leak[1], leak[2], leak[3], leak[4], leak[8]);
   EXPECT_EQ(out(line, 10, 0), 50.f);
   // Measured: at most 0.0045 (1e-4 of the line) at distance 1-4, 0 beyond: what remains is the
   // mask's 1/1024 share of a sharp pixel. Unweighted bilinear reads leaked 0.76 here.
@@ -318,9 +320,8 @@ TEST(DofPoisson, FloatEdgeCases) {
 TEST(DofPoisson, ReportsStagesAndSkipping) {
   const std::ptrdiff_t w = 256, h = 192;
   const Image color = random_image(w, h, 3, 0.f, 1.f, 15);
-  const Image coc = make_coc(w, h, [](auto x, auto y) {
-    return (x >= 68 && x < 124 && y >= 70 && y < 126) ? 14.f : 0.f;
-  });
+  const Image coc = make_coc(
+      w, h, [](auto x, auto y) { return (x >= 68 && x < 124 && y >= 70 && y < 126) ? 14.f : 0.f; });
   DofReport report;
   run(poisson(), color, coc, {}, &report);
   EXPECT_GE(report.stages.size(), 2u);

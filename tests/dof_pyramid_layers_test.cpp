@@ -82,8 +82,9 @@ TEST(PyramidLayers, AllSharpReturnsInputBitForBit) {
 // v for any CoC map, up to float rounding.
 TEST(PyramidLayers, ConstantColourStaysConstant) {
   for (auto [w, h] : {std::pair{17, 5}, std::pair{160, 121}}) {
-    const Image color = make_image(
-        w, h, 3, [](auto, auto, int c) { return c == 0 ? 0.37f : c == 1 ? 5.f : 1e-3f; });
+    const Image color = make_image(w, h, 3, [](auto, auto, int c) {
+      return c == 0 ? 0.37f : c == 1 ? 5.f : 1e-3f;
+    });
     Image coc = mixed_coc(w, h);
     coc(0, 0, 0) = -300.f;  // a huge near disc too
     const Result r = run(color, coc);
@@ -328,8 +329,8 @@ TEST(PyramidLayers, ThreadCountDoesNotChangeBits) {
 // Degenerate and odd sizes, CoCs far larger than the frame (up to 1e9 px, clamped to the
 // method's largest diameter): finite, within the input's range, a constant stays constant.
 TEST(PyramidLayers, SmallSizesAndHugeCoc) {
-  for (auto [w, h] : {std::pair{1, 1}, std::pair{2, 3}, std::pair{17, 5}, std::pair{31, 1},
-                      std::pair{1, 29}})
+  for (auto [w, h] :
+       {std::pair{1, 1}, std::pair{2, 3}, std::pair{17, 5}, std::pair{31, 1}, std::pair{1, 29}})
     for (float big : {30.f, -1000.f, 1e9f}) {
       const Image color = random_image(w, h, 3, 0.f, 1.f, 9);
       const Image coc = make_coc(w, h, [&](auto x, auto y) {

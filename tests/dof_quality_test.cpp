@@ -83,9 +83,8 @@ TEST(DofError, CheckerboardNoiseGivesExactRmse) {
   // +-0.02 in a checkerboard over a 0.5 grey: every squared error is 4e-4, so RMSE 0.02 and
   // PSNR 10 log10(1 / 4e-4) = 33.98 dB, whatever the pattern.
   const Image reference = make_image(16, 9, 3, [](auto, auto, int) { return 0.5f; });
-  const Image out = make_image(16, 9, 3, [](auto x, auto y, int c) {
-    return 0.5f + ((x + y + c) % 2 ? 0.02f : -0.02f);
-  });
+  const Image out = make_image(
+      16, 9, 3, [](auto x, auto y, int c) { return 0.5f + ((x + y + c) % 2 ? 0.02f : -0.02f); });
   const Image coc = make_coc(16, 9, [](auto, auto) { return 0.f; });
   const DofError e = dof_error(out, reference, reference, coc.plane(0), 1.f);
   EXPECT_NEAR(e.rmse, 0.02, 1e-7);
@@ -208,8 +207,8 @@ TEST(DofScenes, EverySceneAnySizeDeterministicFinite) {
   ASSERT_EQ(dof_scenes().size(), 6u);
   for (const DofSceneInfo& info : dof_scenes()) {
     EXPECT_FALSE(info.provokes.empty());
-    for (auto [w, h] : {std::pair<std::ptrdiff_t, std::ptrdiff_t>{1, 1}, {2, 3}, {17, 5},
-                        {96, 64}}) {
+    for (auto [w, h] :
+         {std::pair<std::ptrdiff_t, std::ptrdiff_t>{1, 1}, {2, 3}, {17, 5}, {96, 64}}) {
       const DofScene a = make_dof_scene(info.name, w, h, 1), b = make_dof_scene(info.name, w, h, 2);
       ASSERT_EQ(a.name, info.name);
       ASSERT_EQ(a.color.width(), w);
@@ -246,12 +245,12 @@ TEST(DofScenes, TexturedEnoughThatBlurShows) {
 }
 
 TEST(DofScenes, LargeCocCoversMostOfTheFrameAtAnySize) {
-  for (auto [w, h] : {std::pair<std::ptrdiff_t, std::ptrdiff_t>{256, 256}, {1024, 1024},
-                      {384, 216}}) {
+  for (auto [w, h] :
+       {std::pair<std::ptrdiff_t, std::ptrdiff_t>{256, 256}, {1024, 1024}, {384, 216}}) {
     const DofScene s = make_dof_scene("large-coc", w, h);
     const double large = fraction_of(s.coc, [](float c) { return std::fabs(c) >= 32; });
-    EXPECT_GE(large, 0.85) << w << "x" << h;  // designed: 92%
-    EXPECT_GT(fraction_of(s.coc, [](float c) { return c < 0; }), 0.15);  // a near block
+    EXPECT_GE(large, 0.85) << w << "x" << h;                              // designed: 92%
+    EXPECT_GT(fraction_of(s.coc, [](float c) { return c < 0; }), 0.15);   // a near block
     EXPECT_GT(fraction_of(s.coc, [](float c) { return c == 0; }), 0.05);  // a sharp strip
   }
 }
@@ -270,8 +269,8 @@ bool adjacent(const DofScene& s, const std::function<bool(std::ptrdiff_t, std::p
 TEST(DofScenes, SharpForegroundIsSaturatedAndNextToBlurredBackground) {
   const DofScene s = make_dof_scene("sharp-foreground", 256, 256);
   auto saturated_sharp = [&](std::ptrdiff_t x, std::ptrdiff_t y) {
-    return std::fabs(s.coc(x, y, 0)) < 1 && s.color(x, y, 0) > 0.5f &&
-           s.color(x, y, 1) < 0.05f && s.color(x, y, 2) < 0.05f;
+    return std::fabs(s.coc(x, y, 0)) < 1 && s.color(x, y, 0) > 0.5f && s.color(x, y, 1) < 0.05f &&
+           s.color(x, y, 2) < 0.05f;
   };
   auto far_blurred = [&](std::ptrdiff_t x, std::ptrdiff_t y) { return s.coc(x, y, 0) >= 16; };
   EXPECT_TRUE(adjacent(s, saturated_sharp, far_blurred));
@@ -301,9 +300,9 @@ TEST(DofScenes, DepthGradientPassesSmoothlyFromFarThroughFocusToNear) {
   EXPECT_LT(s.coc(10, h - 1, 0), -27.f);
   for (std::ptrdiff_t y = 1; y < h; ++y) {
     const float step = s.coc(10, y - 1, 0) - s.coc(10, y, 0);
-    EXPECT_GT(step, 0.f) << y;                       // monotone: far at the top, near below
-    EXPECT_LE(step, 56.f / float(h) + 1e-4f) << y;   // smooth: 56 px over the height
-    EXPECT_EQ(s.coc(0, y, 0), s.coc(63, y, 0));      // a plane tilted about the x axis
+    EXPECT_GT(step, 0.f) << y;                      // monotone: far at the top, near below
+    EXPECT_LE(step, 56.f / float(h) + 1e-4f) << y;  // smooth: 56 px over the height
+    EXPECT_EQ(s.coc(0, y, 0), s.coc(63, y, 0));     // a plane tilted about the x axis
   }
   EXPECT_GT(fraction_of(s.coc, [](float c) { return std::fabs(c) < 1; }), 0.0);
 }
@@ -404,8 +403,8 @@ TEST(DofHarness, EveryMethodOnEveryScene) {
         EXPECT_EQ(e.leakage, 0.0) << info.name;
       }
       std::printf("[ measured ] %-16s %-10s %8.2f %7.4f %8.4f %8.3f %9.4f %9.4f\n",
-                  std::string(info.name).c_str(), std::string(method.name).c_str(), e.psnr,
-                  e.ssim, e.rmse, e.max_abs, e.in_focus_max, e.leakage);
+                  std::string(info.name).c_str(), std::string(method.name).c_str(), e.psnr, e.ssim,
+                  e.rmse, e.max_abs, e.in_focus_max, e.leakage);
     }
   }
 }
@@ -427,10 +426,11 @@ TEST(DofHarness, MeasuredOnTheProceduralScene) {
     const double seconds = timed(method, out);
     const DofError e = dof_error(out, reference, s.color, s.coc.plane(0), 1.f);
     const TileMap tiles(s.coc.plane(0), 1.f);
-    std::printf("[ measured ] procedural 640x360 %-10s RMSE %.4f max %.3f PSNR %.2f SSIM %.4f "
-                "leakage %.4f in-focus max %.4f; %.3f s = %.2f x scatter (work fraction %.2f)\n",
-                std::string(method.name).c_str(), e.rmse, e.max_abs, e.psnr, e.ssim, e.leakage,
-                e.in_focus_max, seconds, seconds / scatter_seconds, tiles.work_fraction());
+    std::printf(
+        "[ measured ] procedural 640x360 %-10s RMSE %.4f max %.3f PSNR %.2f SSIM %.4f "
+        "leakage %.4f in-focus max %.4f; %.3f s = %.2f x scatter (work fraction %.2f)\n",
+        std::string(method.name).c_str(), e.rmse, e.max_abs, e.psnr, e.ssim, e.leakage,
+        e.in_focus_max, seconds, seconds / scatter_seconds, tiles.work_fraction());
     EXPECT_EQ(out.width(), 640);
   }
 }

@@ -282,9 +282,10 @@ TEST(ScatterReference, BadInputIsRejected) {
   Image out;
   DofReport report;
   const Image small(19, 12, 1);
-  EXPECT_EQ(
-      invalid_argument_of([&] { depth_of_field(out, color, small.plane(0), scatter(), {}); }).argument,
-      "coc");
+  EXPECT_EQ(invalid_argument_of([&] {
+              depth_of_field(out, color, small.plane(0), scatter(), {});
+            }).argument,
+            "coc");
   Image coc = make_coc(20, 12, [](auto, auto) { return 5.f; });
   coc(4, 9, 0) = std::numeric_limits<float>::quiet_NaN();
   const Thrown nan_coc = invalid_argument_of([&] { run(color, coc); });

@@ -83,16 +83,14 @@ double overlap(double lo, double hi, std::ptrdiff_t i, std::ptrdiff_t n) {
 
 // The mean of the half-resolution image (upsampled by pixel replication) over the
 // full-resolution box of half-extents (ax, ay) about the centre of pixel (x, y).
-double box_mean(const HalfRes& h, int c, std::ptrdiff_t x, std::ptrdiff_t y, double ax,
-                double ay) {
+double box_mean(const HalfRes& h, int c, std::ptrdiff_t x, std::ptrdiff_t y, double ax, double ay) {
   const double x0 = (double(x) + 0.5 - ax) / 2, x1 = (double(x) + 0.5 + ax) / 2;
   const double y0 = (double(y) + 0.5 - ay) / 2, y1 = (double(y) + 0.5 + ay) / 2;
   auto first = [](double lo, std::ptrdiff_t n) {
     return std::clamp<std::ptrdiff_t>(std::ptrdiff_t(std::floor(std::max(lo, -1.0))), 0, n - 1);
   };
   auto last = [](double hi, std::ptrdiff_t n) {
-    return std::clamp<std::ptrdiff_t>(std::ptrdiff_t(std::min(std::ceil(hi), double(n))), 0,
-                                      n - 1);
+    return std::clamp<std::ptrdiff_t>(std::ptrdiff_t(std::min(std::ceil(hi), double(n))), 0, n - 1);
   };
   double sum = 0;
   for (std::ptrdiff_t j = first(y0, h.height); j <= last(y1, h.height); ++j) {
@@ -180,8 +178,7 @@ TEST(SatDof, UniformCocIsTheThreeBoxAverage) {
           for (std::ptrdiff_t y = 0; y < size.height; ++y)
             for (std::ptrdiff_t x = 0; x < size.width; ++x)
               worst = std::max(worst, std::fabs(double(r.out(x, y, c)) - expected[i++]));
-        EXPECT_LE(worst, tol) << name << " " << size.width << " x " << size.height << ", CoC "
-                              << d;
+        EXPECT_LE(worst, tol) << name << " " << size.width << " x " << size.height << ", CoC " << d;
         worst_ratio = std::max(worst_ratio, worst / tol);
       }
     }
@@ -201,8 +198,7 @@ TEST(SatDof, HugeCocTendsToTheCornerMean) {
       const Image coc = make_coc(9, 7, [&](auto, auto) { return d; });
       const Result r = run(name, color, coc);
       for (int c = 0; c < 2; ++c) {
-        const double corners =
-            (h.at(0, 0, c) + h.at(4, 0, c) + h.at(0, 3, c) + h.at(4, 3, c)) / 4;
+        const double corners = (h.at(0, 0, c) + h.at(4, 0, c) + h.at(0, 3, c) + h.at(4, 3, c)) / 4;
         for (std::ptrdiff_t y = 0; y < 7; ++y)
           for (std::ptrdiff_t x = 0; x < 9; ++x) {
             ASSERT_TRUE(std::isfinite(r.out(x, y, c)));
@@ -335,14 +331,14 @@ TEST(SatDof, ThreadsAndSkippingChangeNoBit) {
   auto near_disc = [](std::ptrdiff_t x, std::ptrdiff_t y) {
     return std::hypot(double(x - 60), double(y - 50)) < 20;
   };
-  const Image cocs[] = {make_coc(width, height,
-                                 [&](auto x, auto y) {
-                                   if (near_disc(x, y)) return -13.f;
-                                   if (x > 170 && y > 110) return 9.f + 0.1f * float(y);
-                                   return 0.2f;
-                                 }),
-                        make_coc(width, height,
-                                 [&](auto x, auto y) { return near_disc(x, y) ? -13.f : 0.f; })};
+  const Image cocs[] = {
+      make_coc(width, height,
+               [&](auto x, auto y) {
+                 if (near_disc(x, y)) return -13.f;
+                 if (x > 170 && y > 110) return 9.f + 0.1f * float(y);
+                 return 0.2f;
+               }),
+      make_coc(width, height, [&](auto x, auto y) { return near_disc(x, y) ? -13.f : 0.f; })};
   for (const Image& coc : cocs)
     for (const char* name : kMethods) {
       DofOptions one, two, no_skip;
@@ -374,9 +370,8 @@ TEST(SatDof, ThreadsAndSkippingChangeNoBit) {
 // the far layer alone, which holds only black: exactly 0 there.
 TEST(SatDof, LayersStopSharpColourLeakingIntoBackground) {
   const std::ptrdiff_t width = 96, height = 64;
-  const Image color = make_image(width, height, 1, [](auto x, auto, int) {
-    return x < 48 ? 1.f : 0.f;
-  });
+  const Image color =
+      make_image(width, height, 1, [](auto x, auto, int) { return x < 48 ? 1.f : 0.f; });
   const Image coc = make_coc(width, height, [](auto x, auto) { return x < 48 ? 0.f : 12.f; });
   const Result plain = run("sat", color, coc), layered = run("sat-layers", color, coc);
   double plain_leak = 0, layered_leak = 0;
@@ -479,9 +474,10 @@ TEST(SatDof, NearObjectHidesSmallBlurBehindIt) {
     for (std::ptrdiff_t x = s0 + 3; x < s0 + 8; ++x)
       scatter_green = std::max(scatter_green, double(reference(x, y, 1)));
   EXPECT_LT(scatter_green, 1e-6);
-  std::printf("[ measured ] green 3-7 px inside the near edge: sat %.3f, sat-layers %.3g, "
-              "scatter %.3g\n",
-              plain_green, layered_green, scatter_green);
+  std::printf(
+      "[ measured ] green 3-7 px inside the near edge: sat %.3f, sat-layers %.3g, "
+      "scatter %.3g\n",
+      plain_green, layered_green, scatter_green);
 }
 
 // Against the scatter reference on the procedural scene (640 x 360, thin-lens CoC). Both are

@@ -308,16 +308,14 @@ TEST(ArtistCurve, EmptyOrReversedRangeWithARadiusIsRefused) {
     const char* argument;
     const char* names;
   };
-  for (const Case& k : {Case{[](ArtistCurve& c) { c.near_end_m = c.near_start_m; }, "near_end",
-                             "near_start"},
-                        Case{[](ArtistCurve& c) { std::swap(c.near_start_m, c.near_end_m); },
-                             "near_end", "near_start"},
-                        Case{[](ArtistCurve& c) { c.near_start_m = c.near_end_m = 0.f; },
-                             "near_end", "near_start"},
-                        Case{[](ArtistCurve& c) { c.far_end_m = c.far_start_m; }, "far_end",
-                             "far_start"},
-                        Case{[](ArtistCurve& c) { std::swap(c.far_start_m, c.far_end_m); },
-                             "far_end", "far_start"}}) {
+  for (const Case& k :
+       {Case{[](ArtistCurve& c) { c.near_end_m = c.near_start_m; }, "near_end", "near_start"},
+        Case{[](ArtistCurve& c) { std::swap(c.near_start_m, c.near_end_m); }, "near_end",
+             "near_start"},
+        Case{[](ArtistCurve& c) { c.near_start_m = c.near_end_m = 0.f; }, "near_end", "near_start"},
+        Case{[](ArtistCurve& c) { c.far_end_m = c.far_start_m; }, "far_end", "far_start"},
+        Case{[](ArtistCurve& c) { std::swap(c.far_start_m, c.far_end_m); }, "far_end",
+             "far_start"}}) {
     ArtistCurve c = example_curve();
     k.edit(c);
     const Thrown thrown = invalid_argument_of([&] { validate(c); });
@@ -877,7 +875,8 @@ TEST(DofInput, DiffusionNamesTheCocWhoseConductanceOverflows) {
     for (bool layers : {false, true}) {
       DofOptions settings;
       settings.layers = layers;
-      const Thrown t = invalid_argument_of([&] { run(find_dof_method(name), color, coc, settings); });
+      const Thrown t =
+          invalid_argument_of([&] { run(find_dof_method(name), color, coc, settings); });
       EXPECT_EQ(t.argument, "coc") << name;
       EXPECT_TRUE(contains(t.message, "pixel (66, 38)")) << name << " " << t.message;
     }
@@ -892,7 +891,8 @@ TEST(DofInput, RefusedInputLeavesTheOutputUntouched) {
   for (const DofMethod& method : dof_methods()) {
     Image out = before;
     DofReport report;
-    EXPECT_THROW(depth_of_field(out, color, coc.plane(0), method, {}), InvalidArgument) << method.name;
+    EXPECT_THROW(depth_of_field(out, color, coc.plane(0), method, {}), InvalidArgument)
+        << method.name;
     std::ptrdiff_t changed = 0;
     for (int ch = 0; ch < 3; ++ch)
       for (std::ptrdiff_t y = 0; y < 30; ++y)
@@ -939,9 +939,10 @@ TEST(DofInput, CocOfWrongSizeRejected) {
     for (const DofMethod& method : dof_methods()) {
       Image out;
       DofReport report;
-      EXPECT_EQ(
-          invalid_argument_of([&] { depth_of_field(out, color, coc.plane(0), method, {}); }).argument,
-          "coc")
+      EXPECT_EQ(invalid_argument_of([&] {
+                  depth_of_field(out, color, coc.plane(0), method, {});
+                }).argument,
+                "coc")
           << method.name;
     }
   }

@@ -164,9 +164,9 @@ TEST(DofTiles, BadArgumentsAreNamed) {
   EXPECT_THROW(copy_unreached_tiles(other.plane(0), coc.plane(0), tiles), InvalidArgument);
   // `threads` means what it means everywhere in the library: 0 to kMaxThreads.
   for (int threads : {-1, kMaxThreads + 1, 1 << 20}) {
-    EXPECT_EQ(testing_util::invalid_argument_of(
-                  [&] { TileMap(coc.plane(0), 1.f, 8, 0, threads); })
-                  .argument,
+    EXPECT_EQ(testing_util::invalid_argument_of([&] {
+                TileMap(coc.plane(0), 1.f, 8, 0, threads);
+              }).argument,
               "threads")
         << threads;
     Image out(10, 10, 1);

@@ -155,8 +155,8 @@ TEST(SrgbCurve, NegativeThreadsAreRejected) {
 // Round trips
 
 TEST_F(ImageIo, FloatExrIsReadExactly) {
-  const std::vector<float> pixels = {0.1f, 1e-7f, 123456.79f, 3.14159265f, -2.5f, 0.f,
-                                     7e4f, 1e-30f, 0.333333343f, 1.f, 2.f, 65505.f};
+  const std::vector<float> pixels = {0.1f, 1e-7f,  123456.79f,   3.14159265f, -2.5f, 0.f,
+                                     7e4f, 1e-30f, 0.333333343f, 1.f,         2.f,   65505.f};
   write_floats(file("float.exr"), 2, 2, {"R", "G", "B"}, pixels);
   const ColorImage read = read_color(file("float.exr"));
   EXPECT_EQ(read.encoding, ColorEncoding::Linear);
@@ -237,9 +237,9 @@ TEST_F(ImageIo, ThreadsChangeNothingAndBadCountsAreRefused) {
   const ColorImage a = read_color(file("t.png"), {.threads = 1});
   const ColorImage b = read_color(file("t.png"), {.threads = 2});
   EXPECT_EQ(image_difference(a.pixels, b.pixels).max, 0.0);
-  EXPECT_EQ(invalid_argument_of([&] { encode_image(file("u.png"), image, {.threads = -1}); })
-                .argument,
-            "threads");
+  EXPECT_EQ(
+      invalid_argument_of([&] { encode_image(file("u.png"), image, {.threads = -1}); }).argument,
+      "threads");
   EXPECT_EQ(invalid_argument_of([&] { read_color(file("t.png"), {.threads = -1}); }).argument,
             "threads");
   EXPECT_FALSE(std::filesystem::exists(file("u.png")));
@@ -415,13 +415,15 @@ TEST_F(ImageIo, ForcedSrgbThatOverflowsIsRefusedNamingThePixel) {
   write_floats(file("bright.exr"), 4, 2, {"R", "G", "B"}, pixels);
   const std::string message =
       message_of([&] { read_color(file("bright.exr"), {.encoding = ColorEncoding::Srgb}); });
-  EXPECT_TRUE(contains(message, "bright.exr: pixel (2, 1) of channel 'G' is too large for the "
-                                "sRGB curve"))
+  EXPECT_TRUE(contains(message,
+                       "bright.exr: pixel (2, 1) of channel 'G' is too large for the "
+                       "sRGB curve"))
       << message;
   EXPECT_EQ(read_color(file("bright.exr")).pixels(2, 1, 1), 1e20f);  // linear: as stored
   pixels[(1 * 4 + 2) * 3 + 1] = 1e15f;
   write_floats(file("bright.exr"), 4, 2, {"R", "G", "B"}, pixels);
-  const float decoded = read_color(file("bright.exr"), {.encoding = ColorEncoding::Srgb}).pixels(2, 1, 1);
+  const float decoded =
+      read_color(file("bright.exr"), {.encoding = ColorEncoding::Srgb}).pixels(2, 1, 1);
   EXPECT_NEAR(decoded / std::pow(1e15 / 1.055, 2.4), 1.0, 1e-4);
 }
 
@@ -439,7 +441,8 @@ TEST_F(ImageIo, DepthPicksZByDefault) {
 }
 
 TEST_F(ImageIo, DepthFallsBackToDepthThenTheOnlyChannel) {
-  write_depth_exr(file("rgbdepth.exr"), 2, 2, [](int x, int) { return 5.f + x; }, "depth");
+  write_depth_exr(
+      file("rgbdepth.exr"), 2, 2, [](int x, int) { return 5.f + x; }, "depth");
   EXPECT_EQ(read_depth(file("rgbdepth.exr"))(1, 0, 0), 6.f);
 
   const std::vector<float> single = {4.f, 3.f};
@@ -533,12 +536,11 @@ TEST_F(ImageIo, DepthNormalizedOutsideUnitRangeIsRefused) {
   options.far_plane = 10.f;
   for (const Case& bad : cases) {
     SCOPED_TRACE(bad.words);
-    write_depth_exr(file("bad.exr"), 4, 3, [&](int x, int y) {
-      return x == bad.x && y == bad.y ? bad.value : 0.5f;
-    });
+    write_depth_exr(file("bad.exr"), 4, 3,
+                    [&](int x, int y) { return x == bad.x && y == bad.y ? bad.value : 0.5f; });
     const std::string message = message_of([&] { read_depth(file("bad.exr"), options); });
-    EXPECT_TRUE(contains(message, "bad.exr: pixel " + pixel_name(bad.x, bad.y) +
-                                      " of channel 'Z' " + bad.words));
+    EXPECT_TRUE(contains(
+        message, "bad.exr: pixel " + pixel_name(bad.x, bad.y) + " of channel 'Z' " + bad.words));
     EXPECT_TRUE(contains(message, "must lie in [0, 1]"));
   }
 }
@@ -573,9 +575,8 @@ TEST_F(ImageIo, DepthInverseIsReciprocal) {
   for (int y = 0; y < 2; ++y)
     for (int x = 0; x < 4; ++x) EXPECT_FLOAT_EQ(depth(x, y, 0), 1.f / (0.5f + x + 2.f * y));
 
-  write_depth_exr(file("inverse0.exr"), 4, 3, [](int x, int y) {
-    return x == 3 && y == 2 ? 0.f : 1.f;
-  });
+  write_depth_exr(file("inverse0.exr"), 4, 3,
+                  [](int x, int y) { return x == 3 && y == 2 ? 0.f : 1.f; });
   const std::string message = message_of([&] { read_depth(file("inverse0.exr"), options); });
   EXPECT_TRUE(contains(message, "inverse0.exr: pixel (3, 2) of channel 'Z' is 0"));
   EXPECT_TRUE(contains(message, "infinite"));
@@ -604,12 +605,11 @@ TEST_F(ImageIo, BadDepthValuesNameThePixel) {
   for (const Case& bad : cases) {
     SCOPED_TRACE(bad.words);
     const std::string name = file("bad.exr");
-    write_depth_exr(name, 5, 3, [&](int x, int y) {
-      return x == bad.x && y == bad.y ? bad.value : 1.f;
-    });
+    write_depth_exr(name, 5, 3,
+                    [&](int x, int y) { return x == bad.x && y == bad.y ? bad.value : 1.f; });
     const std::string message = message_of([&] { read_depth(name); });
-    EXPECT_TRUE(contains(message, "bad.exr: pixel " + pixel_name(bad.x, bad.y) +
-                                      " of channel 'Z' " + bad.words));
+    EXPECT_TRUE(contains(
+        message, "bad.exr: pixel " + pixel_name(bad.x, bad.y) + " of channel 'Z' " + bad.words));
   }
 }
 
@@ -767,7 +767,10 @@ TEST_F(ImageIo, ExrHeaderDeclaringMoreThanTheFileHoldsIsRefused) {
   // A name past OpenEXR's 31 characters (no long-names flag): OpenEXR would read the rest as
   // the type and size, ASCII as 1.9 GB (found by fuzzing).
   std::string long_name("\x76\x2f\x31\x01\x02\x00\x00\x00", 8);
-  long_name += std::string(40, 'n') + std::string("\0string\0\x03\x00\x00\x00" "abc", 15);
+  long_name += std::string(40, 'n') + std::string(
+                                          "\0string\0\x03\x00\x00\x00"
+                                          "abc",
+                                          15);
   std::ofstream(file("long.exr"), std::ios::binary) << long_name;
   EXPECT_TRUE(contains(message_of([&] { read_color(file("long.exr")); }),
                        "long.exr: is damaged: a header name is longer than 31 characters"));

@@ -66,12 +66,13 @@ TEST_F(OutputFilesTest, WritesAndReplacesWholeKeepingPermissions) {
 TEST_F(OutputFilesTest, SpecialFilesAreRefusedAndLeftAsTheyAre) {
   ASSERT_EQ(::mkfifo(file("pipe").c_str(), 0600), 0);
   OutputFiles files;
-  EXPECT_TRUE(contains(message_of([&] { files.claim("--report", file("pipe")); }),
-                       "--report '" + file("pipe") + "': is a FIFO (named pipe), not a regular file"));
+  EXPECT_TRUE(
+      contains(message_of([&] { files.claim("--report", file("pipe")); }),
+               "--report '" + file("pipe") + "': is a FIFO (named pipe), not a regular file"));
   EXPECT_TRUE(contains(message_of([&] { files.claim("--report", "/dev/null"); }),
                        "'/dev/null': is a character device"));
-  EXPECT_TRUE(contains(message_of([&] { files.claim("--output", folder_.string()); }),
-                       "is a folder"));
+  EXPECT_TRUE(
+      contains(message_of([&] { files.claim("--output", folder_.string()); }), "is a folder"));
   EXPECT_TRUE(fs::is_fifo(file("pipe")));
   EXPECT_TRUE(fs::is_character_file("/dev/null"));
   EXPECT_EQ(listing(), (std::set<std::string>{"pipe"}));
@@ -164,7 +165,8 @@ TEST_F(OutputFilesTest, AFailedWriteChangesNothing) {
   ::setrlimit(RLIMIT_FSIZE, &saved);
   ::signal(SIGXFSZ, old_handler);
 
-  EXPECT_TRUE(contains(message, "--output '" + file("keep.bin") + "': cannot write (File too large)"));
+  EXPECT_TRUE(
+      contains(message, "--output '" + file("keep.bin") + "': cannot write (File too large)"));
   EXPECT_EQ(get("keep.bin"), "old content");
   files = OutputFiles();  // the run gives up: its staged report goes too
   EXPECT_EQ(listing(), (std::set<std::string>{"keep.bin"}));

@@ -38,7 +38,9 @@ void check_every_method(bool periodic) {
 
 TYPED_TEST(SolverAccuracy, EveryMethodMatchesLongDoubleLu) { check_every_method<TypeParam>(false); }
 
-TYPED_TEST(SolverAccuracy, PeriodicSystemsMatchLongDoubleLu) { check_every_method<TypeParam>(true); }
+TYPED_TEST(SolverAccuracy, PeriodicSystemsMatchLongDoubleLu) {
+  check_every_method<TypeParam>(true);
+}
 
 // Partial pivoting on random matrices that are far from dominant, with b[0] = 0 so that
 // elimination without pivoting would divide by zero at once.

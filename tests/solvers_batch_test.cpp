@@ -176,8 +176,7 @@ std::vector<T> solve_batch(const Batch<T>& batch, SolveOptions options,
   std::vector<T> x(storage_size(batch.layout), sentinel<T>());
   if (placement == Placement::InPlace) {
     x = batch.d;
-    solve_in_place(batch.a.data(), batch.b.data(), batch.c.data(), x.data(), batch.layout,
-                   options);
+    solve_in_place(batch.a.data(), batch.b.data(), batch.c.data(), x.data(), batch.layout, options);
   } else {
     solve(batch.a.data(), batch.b.data(), batch.c.data(), batch.d.data(), x.data(), batch.layout,
           options);
@@ -208,8 +207,8 @@ void check_against_reference(std::initializer_list<Kind> kinds, bool periodic) {
       for (Kind kind : kinds) {
         const auto batch = make_batch(systems, make_layout(kind, n, count));
         for (Method method : kAllMethods) {
-          SCOPED_TRACE(::testing::Message() << name(kind) << ", n = " << n << ", count = "
-                                            << count << ", method = " << to_string(method));
+          SCOPED_TRACE(::testing::Message() << name(kind) << ", n = " << n << ", count = " << count
+                                            << ", method = " << to_string(method));
           const auto x = solve_batch(batch, with(method));
           for (std::ptrdiff_t s = 0; s < count; ++s) {
             const auto xs = pick(x, batch.layout, s);
@@ -256,8 +255,8 @@ TYPED_TEST(SolverBatch, PaddingOutsideTheLayoutIsLeftUntouched) {
     for (std::ptrdiff_t n : {1, 5, 40})
       for (std::ptrdiff_t count : kCounts)
         for (Kind kind : kKinds) {
-          const auto batch = make_batch(random_systems<T>(n, count, periodic),
-                                        make_layout(kind, n, count));
+          const auto batch =
+              make_batch(random_systems<T>(n, count, periodic), make_layout(kind, n, count));
           const auto mask = reached(batch.layout);
           for (Method method : kAllMethods)
             for (Placement placement : {Placement::OutOfPlace, Placement::InPlace}) {
@@ -293,8 +292,8 @@ TYPED_TEST(SolverBatch, LayoutDoesNotChangeTheResult) {
             const auto other = make_batch(systems, make_layout(kind, n, count));
             const auto x_other = solve_batch(other, with(method));
             for (std::ptrdiff_t s = 0; s < count; ++s) {
-              const auto row = first_difference(pick(x_rows, rows.layout, s),
-                                                pick(x_other, other.layout, s));
+              const auto row =
+                  first_difference(pick(x_rows, rows.layout, s), pick(x_other, other.layout, s));
               EXPECT_EQ(row, -1) << "system " << s << " (later systems not compared)";
               if (row >= 0) break;
             }
@@ -317,9 +316,9 @@ TYPED_TEST(SolverBatch, BatchedEqualsSingleSystemForPerSystemMethods) {
           const auto batch = make_batch(systems, make_layout(kind, n, count));
           for (Method method : {Method::CyclicReduction, Method::ParallelCyclicReduction,
                                 Method::Hybrid, Method::Pivoting}) {
-            SCOPED_TRACE(::testing::Message() << name(kind) << ", n = " << n << ", count = "
-                                              << count << ", method = " << to_string(method)
-                                              << (periodic ? ", periodic" : ""));
+            SCOPED_TRACE(::testing::Message()
+                         << name(kind) << ", n = " << n << ", count = " << count
+                         << ", method = " << to_string(method) << (periodic ? ", periodic" : ""));
             const auto x = solve_batch(batch, with(method));
             for (std::ptrdiff_t s = 0; s < count; ++s) {
               const auto row = first_difference(pick(x, batch.layout, s),
@@ -339,12 +338,12 @@ TYPED_TEST(SolverBatch, InPlaceEqualsOutOfPlace) {
     for (std::ptrdiff_t n : kRows)
       for (std::ptrdiff_t count : kCounts)
         for (Kind kind : kKinds) {
-          const auto batch = make_batch(random_systems<T>(n, count, periodic),
-                                        make_layout(kind, n, count));
+          const auto batch =
+              make_batch(random_systems<T>(n, count, periodic), make_layout(kind, n, count));
           for (Method method : kAllMethods) {
-            SCOPED_TRACE(::testing::Message() << name(kind) << ", n = " << n << ", count = "
-                                              << count << ", method = " << to_string(method)
-                                              << (periodic ? ", periodic" : ""));
+            SCOPED_TRACE(::testing::Message()
+                         << name(kind) << ", n = " << n << ", count = " << count
+                         << ", method = " << to_string(method) << (periodic ? ", periodic" : ""));
             EXPECT_EQ(first_difference(solve_batch(batch, with(method), Placement::OutOfPlace),
                                        solve_batch(batch, with(method), Placement::InPlace)),
                       -1);
@@ -359,12 +358,12 @@ TYPED_TEST(SolverBatch, OneAndTwoThreadsGiveIdenticalResults) {
     for (std::ptrdiff_t n : kRows)
       for (std::ptrdiff_t count : {17, 33, 100, 300})
         for (Kind kind : kKinds) {
-          const auto batch = make_batch(random_systems<T>(n, count, periodic),
-                                        make_layout(kind, n, count));
+          const auto batch =
+              make_batch(random_systems<T>(n, count, periodic), make_layout(kind, n, count));
           for (Method method : kAllMethods) {
-            SCOPED_TRACE(::testing::Message() << name(kind) << ", n = " << n << ", count = "
-                                              << count << ", method = " << to_string(method)
-                                              << (periodic ? ", periodic" : ""));
+            SCOPED_TRACE(::testing::Message()
+                         << name(kind) << ", n = " << n << ", count = " << count
+                         << ", method = " << to_string(method) << (periodic ? ", periodic" : ""));
             EXPECT_EQ(first_difference(solve_batch(batch, with(method, 1)),
                                        solve_batch(batch, with(method, 2))),
                       -1);
@@ -386,11 +385,11 @@ TYPED_TEST(SolverBatch, UnreadCornerEntriesDoNotAffectTheResult) {
           dirty.c[dirty.layout.offset(s, n - 1)] = sentinel<T>();
         }
         for (Method method : kAllMethods) {
-          SCOPED_TRACE(::testing::Message() << name(kind) << ", n = " << n << ", count = "
-                                            << count << ", method = " << to_string(method));
-          EXPECT_EQ(first_difference(solve_batch(clean, with(method)),
-                                     solve_batch(dirty, with(method))),
-                    -1);
+          SCOPED_TRACE(::testing::Message() << name(kind) << ", n = " << n << ", count = " << count
+                                            << ", method = " << to_string(method));
+          EXPECT_EQ(
+              first_difference(solve_batch(clean, with(method)), solve_batch(dirty, with(method))),
+              -1);
         }
       }
 }
@@ -406,8 +405,8 @@ TYPED_TEST(SolverBatch, LongSystemSplitAcrossThreadsMatchesLongDoubleLu) {
   for (Method method : {Method::Auto, Method::Thomas}) {
     SCOPED_TRACE(to_string(method));
     std::vector<T> x(n);
-    const auto report = solve(system.a.data(), system.b.data(), system.c.data(),
-                              system.d.data(), x.data(), BatchLayout::single(n), with(method, 2));
+    const auto report = solve(system.a.data(), system.b.data(), system.c.data(), system.d.data(),
+                              x.data(), BatchLayout::single(n), with(method, 2));
     EXPECT_EQ(report.parts, 2);
     const long double bound = backward_bound<T>(Method::Thomas, n);
     EXPECT_LE(backward_error(system, x), bound);
@@ -501,11 +500,12 @@ void check_diffusion_against_reference(bool periodic) {
   for (std::ptrdiff_t n : kRows)
     for (std::ptrdiff_t count : kCounts)
       for (Kind kind : kKinds) {
-        const auto batch = make_diffusion<T>(make_layout(kind, n, count), periodic, 4, 17 * n + count);
+        const auto batch =
+            make_diffusion<T>(make_layout(kind, n, count), periodic, 4, 17 * n + count);
         for (Method method : kAllMethods) {
-          SCOPED_TRACE(::testing::Message() << name(kind) << ", n = " << n << ", count = "
-                                            << count << ", method = " << to_string(method)
-                                            << (periodic ? ", periodic" : ""));
+          SCOPED_TRACE(::testing::Message()
+                       << name(kind) << ", n = " << n << ", count = " << count
+                       << ", method = " << to_string(method) << (periodic ? ", periodic" : ""));
           const auto x = solve_diffusion_batch(batch, with(method));
           for (std::ptrdiff_t s = 0; s < count; ++s) {
             const auto system = expanded<T>(batch.beta[s], batch.rhs[s], periodic);
@@ -543,9 +543,9 @@ TYPED_TEST(SolverDiffusionBatch, ConservesMass) {
         for (Kind kind : {Kind::Rows, Kind::Columns}) {
           const auto batch = make_diffusion<T>(make_layout(kind, n, count), periodic, 4, n + count);
           for (Method method : kAllMethods) {
-            SCOPED_TRACE(::testing::Message() << name(kind) << ", n = " << n << ", count = "
-                                              << count << ", method = " << to_string(method)
-                                              << (periodic ? ", periodic" : ""));
+            SCOPED_TRACE(::testing::Message()
+                         << name(kind) << ", n = " << n << ", count = " << count
+                         << ", method = " << to_string(method) << (periodic ? ", periodic" : ""));
             const auto x = solve_diffusion_batch(batch, with(method));
             for (std::ptrdiff_t s = 0; s < count; ++s) {
               const auto system = expanded<T>(batch.beta[s], batch.rhs[s], periodic);
@@ -599,11 +599,12 @@ TYPED_TEST(SolverDiffusionBatch, ObeysMaximumPrinciple) {
     for (std::ptrdiff_t n : {2, 5, 40, 1000})
       for (std::ptrdiff_t count : {1, 33, 100})
         for (Kind kind : {Kind::Rows, Kind::Columns}) {
-          const auto batch = make_diffusion<T>(make_layout(kind, n, count), periodic, 4, 3 * n + count);
+          const auto batch =
+              make_diffusion<T>(make_layout(kind, n, count), periodic, 4, 3 * n + count);
           for (Method method : kAllMethods) {
-            SCOPED_TRACE(::testing::Message() << name(kind) << ", n = " << n << ", count = "
-                                              << count << ", method = " << to_string(method)
-                                              << (periodic ? ", periodic" : ""));
+            SCOPED_TRACE(::testing::Message()
+                         << name(kind) << ", n = " << n << ", count = " << count
+                         << ", method = " << to_string(method) << (periodic ? ", periodic" : ""));
             const auto x = solve_diffusion_batch(batch, with(method));
             for (std::ptrdiff_t s = 0; s < count; ++s) {
               const auto system = expanded<T>(batch.beta[s], batch.rhs[s], periodic);
@@ -614,8 +615,7 @@ TYPED_TEST(SolverDiffusionBatch, ObeysMaximumPrinciple) {
                 norm_x = std::max(norm_x, magnitude(xs[i]));
                 norm_rhs = std::max(norm_rhs, magnitude(batch.rhs[s][i]));
               }
-              const long double slack =
-                  backward_bound<T>(method, n) * (norm_a * norm_x + norm_rhs);
+              const long double slack = backward_bound<T>(method, n) * (norm_a * norm_x + norm_rhs);
               expect_within_range(xs, batch.rhs[s], slack, s);
             }
           }
@@ -634,10 +634,11 @@ TYPED_TEST(SolverDiffusionBatch, LargeBetaKeepsSolutionWithinRhsRange) {
   for (std::ptrdiff_t n : {2, 40, 1000})
     for (std::ptrdiff_t count : {1, 33, 100})
       for (Kind kind : kKinds) {
-        const auto batch = make_diffusion<T>(make_layout(kind, n, count), false, R(1e6), 5 * n + count);
+        const auto batch =
+            make_diffusion<T>(make_layout(kind, n, count), false, R(1e6), 5 * n + count);
         for (Method method : {Method::Auto, Method::Thomas}) {
-          SCOPED_TRACE(::testing::Message() << name(kind) << ", n = " << n << ", count = "
-                                            << count << ", method = " << to_string(method));
+          SCOPED_TRACE(::testing::Message() << name(kind) << ", n = " << n << ", count = " << count
+                                            << ", method = " << to_string(method));
           const auto x = solve_diffusion_batch(batch, with(method));
           for (std::ptrdiff_t s = 0; s < count; ++s) {
             const auto xs = pick(x, batch.layout, s);
@@ -659,9 +660,9 @@ TYPED_TEST(SolverDiffusionBatch, ZeroBetaReturnsRhsExactly) {
         for (Kind kind : kKinds) {
           const auto batch = make_diffusion<T>(make_layout(kind, n, count), periodic, 0, n + count);
           for (Method method : kAllMethods) {
-            SCOPED_TRACE(::testing::Message() << name(kind) << ", n = " << n << ", count = "
-                                              << count << ", method = " << to_string(method)
-                                              << (periodic ? ", periodic" : ""));
+            SCOPED_TRACE(::testing::Message()
+                         << name(kind) << ", n = " << n << ", count = " << count
+                         << ", method = " << to_string(method) << (periodic ? ", periodic" : ""));
             const auto x = solve_diffusion_batch(batch, with(method));
             for (std::ptrdiff_t s = 0; s < count; ++s) {
               const auto xs = pick(x, batch.layout, s);
@@ -680,12 +681,13 @@ TYPED_TEST(SolverDiffusionBatch, InPlaceEqualsOutOfPlace) {
         for (Kind kind : kKinds) {
           const auto batch = make_diffusion<T>(make_layout(kind, n, count), periodic, 4, n * count);
           for (Method method : kAllMethods) {
-            SCOPED_TRACE(::testing::Message() << name(kind) << ", n = " << n << ", count = "
-                                              << count << ", method = " << to_string(method)
-                                              << (periodic ? ", periodic" : ""));
-            EXPECT_EQ(first_difference(solve_diffusion_batch(batch, with(method)),
-                                       solve_diffusion_batch(batch, with(method), Placement::InPlace)),
-                      -1);
+            SCOPED_TRACE(::testing::Message()
+                         << name(kind) << ", n = " << n << ", count = " << count
+                         << ", method = " << to_string(method) << (periodic ? ", periodic" : ""));
+            EXPECT_EQ(
+                first_difference(solve_diffusion_batch(batch, with(method)),
+                                 solve_diffusion_batch(batch, with(method), Placement::InPlace)),
+                -1);
           }
         }
 }
@@ -696,11 +698,12 @@ TYPED_TEST(SolverDiffusionBatch, OneAndTwoThreadsGiveIdenticalResults) {
     for (std::ptrdiff_t n : kRows)
       for (std::ptrdiff_t count : {17, 33, 100, 300})
         for (Kind kind : kKinds) {
-          const auto batch = make_diffusion<T>(make_layout(kind, n, count), periodic, 4, n + 5 * count);
+          const auto batch =
+              make_diffusion<T>(make_layout(kind, n, count), periodic, 4, n + 5 * count);
           for (Method method : kAllMethods) {
-            SCOPED_TRACE(::testing::Message() << name(kind) << ", n = " << n << ", count = "
-                                              << count << ", method = " << to_string(method)
-                                              << (periodic ? ", periodic" : ""));
+            SCOPED_TRACE(::testing::Message()
+                         << name(kind) << ", n = " << n << ", count = " << count
+                         << ", method = " << to_string(method) << (periodic ? ", periodic" : ""));
             EXPECT_EQ(first_difference(solve_diffusion_batch(batch, with(method, 1)),
                                        solve_diffusion_batch(batch, with(method, 2))),
                       -1);
@@ -746,8 +749,8 @@ TYPED_TEST(SolverDiffusionBatch, UnreadLastBetaDoesNotAffectTheResult) {
         for (std::ptrdiff_t s = 0; s < count; ++s)
           dirty.beta_storage[dirty.layout.offset(s, n - 1)] = sentinel<R>();
         for (Method method : kAllMethods) {
-          SCOPED_TRACE(::testing::Message() << name(kind) << ", n = " << n << ", count = "
-                                            << count << ", method = " << to_string(method));
+          SCOPED_TRACE(::testing::Message() << name(kind) << ", n = " << n << ", count = " << count
+                                            << ", method = " << to_string(method));
           EXPECT_EQ(first_difference(solve_diffusion_batch(clean, with(method)),
                                      solve_diffusion_batch(dirty, with(method))),
                     -1);

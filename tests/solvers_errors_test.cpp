@@ -28,8 +28,8 @@ using Scalars = ::testing::Types<float, double, std::complex<float>, std::comple
 
 using Call = std::function<void()>;
 
-void expect_invalid_argument(const Call& call, const std::string& argument,
-                             std::ptrdiff_t system, std::ptrdiff_t row) {
+void expect_invalid_argument(const Call& call, const std::string& argument, std::ptrdiff_t system,
+                             std::ptrdiff_t row) {
   try {
     call();
   } catch (const InvalidArgument& e) {
@@ -148,8 +148,7 @@ std::vector<T> run(const Batch<T>& batch, SolveOptions options,
   options.periodic = batch.periodic;
   if (placement == Placement::InPlace) {
     std::vector<T> x = batch.d;
-    solve_in_place(batch.a.data(), batch.b.data(), batch.c.data(), x.data(), batch.layout,
-                   options);
+    solve_in_place(batch.a.data(), batch.b.data(), batch.c.data(), x.data(), batch.layout, options);
     return x;
   }
   std::vector<T> x(batch.d.size(), T(0));
@@ -228,7 +227,9 @@ TYPED_TEST(SolverErrors, NegativeThreadsIsRejected) {
     SCOPED_TRACE(to_string(method));
     expect_invalid_argument([&] { run(batch, with(method, -1)); }, "threads", -1, -1);
     expect_invalid_argument(
-        [&] { solve_diffusion(beta.data(), batch.d.data(), x.data(), batch.layout, with(method, -1)); },
+        [&] {
+          solve_diffusion(beta.data(), batch.d.data(), x.data(), batch.layout, with(method, -1));
+        },
         "threads", -1, -1);
   }
 }
@@ -246,9 +247,12 @@ TYPED_TEST(SolverErrors, ThreadsAboveTheBoundAreRejected) {
     for (int threads : {kMaxThreads + 1, 1 << 20, std::numeric_limits<int>::max()}) {
       SCOPED_TRACE(::testing::Message() << to_string(method) << ", threads " << threads);
       expect_invalid_argument([&] { run(batch, with(method, threads)); }, "threads", -1, -1);
-      expect_invalid_argument([&] {
-        solve_diffusion(beta.data(), batch.d.data(), x.data(), batch.layout, with(method, threads));
-      }, "threads", -1, -1);
+      expect_invalid_argument(
+          [&] {
+            solve_diffusion(beta.data(), batch.d.data(), x.data(), batch.layout,
+                            with(method, threads));
+          },
+          "threads", -1, -1);
       try {
         run(batch, with(method, threads));
       } catch (const InvalidArgument& e) {
@@ -282,10 +286,12 @@ TYPED_TEST(SolverErrors, NullPointerIsNamed) {
   expect_invalid_argument([&] { solve<T>(a, b, c, d, nullptr, layout); }, "x", -1, -1);
   // In place the one array is both rhs and x; it is checked as rhs first.
   expect_invalid_argument([&] { solve_in_place<T>(a, b, c, nullptr, layout); }, "rhs", -1, -1);
-  expect_invalid_argument([&] { solve_diffusion<T>(nullptr, d, x.data(), layout); }, "beta", -1, -1);
-  expect_invalid_argument([&] { solve_diffusion<T>(beta.data(), nullptr, x.data(), layout); }, "rhs",
-                          -1, -1);
-  expect_invalid_argument([&] { solve_diffusion<T>(beta.data(), d, nullptr, layout); }, "x", -1, -1);
+  expect_invalid_argument([&] { solve_diffusion<T>(nullptr, d, x.data(), layout); }, "beta", -1,
+                          -1);
+  expect_invalid_argument([&] { solve_diffusion<T>(beta.data(), nullptr, x.data(), layout); },
+                          "rhs", -1, -1);
+  expect_invalid_argument([&] { solve_diffusion<T>(beta.data(), d, nullptr, layout); }, "x", -1,
+                          -1);
 }
 
 // x may be rhs, but must not share a single element with sub, diag or super (or beta):
@@ -313,8 +319,8 @@ TYPED_TEST(SolverErrors, OutputOverlappingACoefficientArrayIsRejected) {
   const R* beta = reinterpret_cast<const R*>(storage.data());
   for (std::ptrdiff_t shift : {0, 1}) {
     SCOPED_TRACE(::testing::Message() << "beta, shift " << shift);
-    expect_invalid_argument(
-        [&] { solve_diffusion<T>(beta, d, storage.data() + shift, layout); }, "x", -1, -1);
+    expect_invalid_argument([&] { solve_diffusion<T>(beta, d, storage.data() + shift, layout); },
+                            "x", -1, -1);
   }
 }
 
@@ -329,7 +335,9 @@ TYPED_TEST(SolverErrors, OutputPartiallyOverlappingRhsIsRejected) {
   for (std::ptrdiff_t shift : {std::ptrdiff_t(1), -std::ptrdiff_t(1), extent - 1, 1 - extent}) {
     SCOPED_TRACE(::testing::Message() << "x = rhs + " << shift);
     expect_invalid_argument(
-        [&] { solve<T>(batch.a.data(), batch.b.data(), batch.c.data(), rhs, rhs + shift, batch.layout); },
+        [&] {
+          solve<T>(batch.a.data(), batch.b.data(), batch.c.data(), rhs, rhs + shift, batch.layout);
+        },
         "x", -1, -1);
     expect_invalid_argument(
         [&] { solve_diffusion<T>(beta.data(), rhs, rhs + shift, batch.layout); }, "x", -1, -1);
@@ -358,12 +366,12 @@ TYPED_TEST(SolverErrors, SelfOverlappingLayoutIsRejected) {
     const char* argument;
   };
   const Case cases[] = {
-      {BatchLayout::rows(10, 3, 9), "system_stride"},     // rows closer than n apart
-      {BatchLayout::columns(10, 4, 3), "row_stride"},     // pitch smaller than the count
-      {BatchLayout{10, 3, 2, 19}, "system_stride"},       // strided rows, 20 needed
-      {BatchLayout{10, 3, 0, 10}, "row_stride"},          // zero strides
+      {BatchLayout::rows(10, 3, 9), "system_stride"},  // rows closer than n apart
+      {BatchLayout::columns(10, 4, 3), "row_stride"},  // pitch smaller than the count
+      {BatchLayout{10, 3, 2, 19}, "system_stride"},    // strided rows, 20 needed
+      {BatchLayout{10, 3, 0, 10}, "row_stride"},       // zero strides
       {BatchLayout{10, 3, 1, 0}, "system_stride"},
-      {BatchLayout{10, 3, -1, 10}, "row_stride"},         // negative strides
+      {BatchLayout{10, 3, -1, 10}, "row_stride"},  // negative strides
       {BatchLayout{10, 3, 1, -10}, "system_stride"},
       // Sizes whose overlap test would overflow (found by fuzz_solver_args: signed overflow,
       // undefined behaviour that UBSan reports): refused for their extent first.
@@ -372,13 +380,13 @@ TYPED_TEST(SolverErrors, SelfOverlappingLayoutIsRejected) {
       {BatchLayout{2, kHuge, kHuge / 2, 1}, "layout"},
   };
   for (const Case& k : cases) {
-    SCOPED_TRACE(::testing::Message() << "n " << k.layout.n << " count " << k.layout.count
-                                      << " row_stride " << k.layout.row_stride
-                                      << " system_stride " << k.layout.system_stride);
+    SCOPED_TRACE(::testing::Message()
+                 << "n " << k.layout.n << " count " << k.layout.count << " row_stride "
+                 << k.layout.row_stride << " system_stride " << k.layout.system_stride);
     expect_invalid_argument([&] { validate_layout(k.layout); }, k.argument, -1, -1);
     expect_invalid_argument(
-        [&] { solve(v.data(), v.data(), v.data(), v.data(), v.data(), k.layout); }, k.argument,
-        -1, -1);
+        [&] { solve(v.data(), v.data(), v.data(), v.data(), v.data(), k.layout); }, k.argument, -1,
+        -1);
   }
 }
 
@@ -394,8 +402,8 @@ TYPED_TEST(SolverErrors, NonFiniteCoefficientIsNamedWithSystemAndRow) {
     const char* argument;
     std::ptrdiff_t system, row;
   };
-  const Place places[] = {{"sub", 0, 1},  {"sub", 37, 8},   {"sub", 69, 4},
-                          {"diag", 0, 0}, {"diag", 5, 8},   {"diag", 66, 3},
+  const Place places[] = {{"sub", 0, 1},   {"sub", 37, 8},   {"sub", 69, 4},
+                          {"diag", 0, 0},  {"diag", 5, 8},   {"diag", 66, 3},
                           {"super", 1, 0}, {"super", 40, 7}, {"super", 69, 2}};
   for (Kind kind : {Kind::Rows, Kind::Columns})
     for (const Place& place : places)
@@ -444,8 +452,7 @@ void check_non_finite_rhs(Placement placement) {
                        << row << "] = " << value << ", " << to_string(method));
           auto batch = valid_batch<T>(kN, kCount, kind);
           batch.at(batch.d, system, row) = poisoned<T>(value);
-          expect_invalid_argument([&] { run(batch, with(method), placement); }, "rhs", system,
-                                  row);
+          expect_invalid_argument([&] { run(batch, with(method), placement); }, "rhs", system, row);
         }
 }
 
@@ -533,8 +540,8 @@ void check_non_finite_diffusion_rhs(Placement placement) {
         for (auto value : non_finite_values<T>())
           for (Method method : kAllMethods) {
             SCOPED_TRACE(::testing::Message()
-                         << (kind == Kind::Rows ? "rows" : "columns") << ", rhs[" << system
-                         << ", " << row << "] = " << value << ", " << to_string(method)
+                         << (kind == Kind::Rows ? "rows" : "columns") << ", rhs[" << system << ", "
+                         << row << "] = " << value << ", " << to_string(method)
                          << (periodic ? ", periodic" : ""));
             auto batch = valid_batch<T>(kN, kCount, kind);
             batch.at(batch.d, system, row) = poisoned<T>(value);
@@ -570,16 +577,17 @@ TYPED_TEST(SolverErrors, ZeroRowAndColumnRaiseNumericalErrorAtThatRow) {
     std::ptrdiff_t n, count, system, row;
     int threads;
   };
-  const Case cases[] = {{kN, kCount, 6, 3, 0},  {kN, kCount, 68, 4, 0}, {kN, 1, 0, 0, 0},
-                        {kN, 1, 0, 5, 0},       {kN, 1, 0, kN - 1, 0},  {40, 3, 2, 21, 0},
-                        {40, 3, 1, 22, 0},      {std::ptrdiff_t(1) << 16, 1, 0, 40000, 2}};
+  const Case cases[] = {{kN, kCount, 6, 3, 0}, {kN, kCount, 68, 4, 0},
+                        {kN, 1, 0, 0, 0},      {kN, 1, 0, 5, 0},
+                        {kN, 1, 0, kN - 1, 0}, {40, 3, 2, 21, 0},
+                        {40, 3, 1, 22, 0},     {std::ptrdiff_t(1) << 16, 1, 0, 40000, 2}};
   for (const Case& k : cases)
     for (Kind kind : {Kind::Rows, Kind::Columns})
       for (Method method : kAllMethods) {
-        SCOPED_TRACE(::testing::Message() << (kind == Kind::Rows ? "rows" : "columns") << ", n "
-                                          << k.n << ", count " << k.count << ", zero row "
-                                          << k.row << " of system " << k.system << ", "
-                                          << to_string(method) << ", threads " << k.threads);
+        SCOPED_TRACE(::testing::Message()
+                     << (kind == Kind::Rows ? "rows" : "columns") << ", n " << k.n << ", count "
+                     << k.count << ", zero row " << k.row << " of system " << k.system << ", "
+                     << to_string(method) << ", threads " << k.threads);
         auto batch = valid_batch<T>(k.n, k.count, kind);
         batch.at(batch.a, k.system, k.row) = T(0);
         batch.at(batch.b, k.system, k.row) = T(0);
@@ -656,8 +664,8 @@ TYPED_TEST(SolverErrors, AutoSolvesNonDominantMatrix) {
     SCOPED_TRACE(to_string(method));
     std::vector<T> x(batch.d.size());
     SolveReport report;
-    ASSERT_NO_THROW(report = solve(batch.a.data(), batch.b.data(), batch.c.data(),
-                                   batch.d.data(), x.data(), batch.layout, with(method)));
+    ASSERT_NO_THROW(report = solve(batch.a.data(), batch.b.data(), batch.c.data(), batch.d.data(),
+                                   x.data(), batch.layout, with(method)));
     if (method == Method::Auto) {
       EXPECT_EQ(report.pivoted_systems, 1);
     }
@@ -741,8 +749,8 @@ TYPED_TEST(SolverErrors, FailedInPlaceSolveLeavesRhsOfFailedSystemUnchanged) {
     std::ptrdiff_t n, count, system;
     int threads;
   };
-  const Case cases[] = {{kN, 1, 0, 0}, {kN, kCount, 6, 0}, {kN, kCount, 67, 0},
-                        {std::ptrdiff_t(1) << 16, 1, 0, 2}};
+  const Case cases[] = {
+      {kN, 1, 0, 0}, {kN, kCount, 6, 0}, {kN, kCount, 67, 0}, {std::ptrdiff_t(1) << 16, 1, 0, 2}};
   for (bool overflow : {false, true})
     for (const Case& k : cases)
       for (Kind kind : {Kind::Rows, Kind::Columns})
@@ -809,8 +817,8 @@ TYPED_TEST(SolverErrors, NoInputGivesNonFiniteSolutionSilently) {
   for (int trial = 0; trial < 300; ++trial) {
     const std::ptrdiff_t n = 1 + static_cast<std::ptrdiff_t>(random() % 40);
     const std::ptrdiff_t count = 1 + static_cast<std::ptrdiff_t>(random() % 80);
-    auto batch = valid_batch<T>(n, count, random() % 2 ? Kind::Rows : Kind::Columns,
-                                random() % 4 == 0);
+    auto batch =
+        valid_batch<T>(n, count, random() % 2 ? Kind::Rows : Kind::Columns, random() % 4 == 0);
     // A few systems are left dominant; the others get wild entries in some rows.
     for (std::ptrdiff_t s = 0; s < count; ++s) {
       if (random() % 3 == 0) continue;
@@ -822,10 +830,10 @@ TYPED_TEST(SolverErrors, NoInputGivesNonFiniteSolutionSilently) {
     }
     for (Method method : kAllMethods)
       for (bool check : {true, false}) {
-        SCOPED_TRACE(::testing::Message() << "trial " << trial << ", n " << n << ", count "
-                                          << count << ", " << to_string(method)
-                                          << (batch.periodic ? ", periodic" : "")
-                                          << (check ? "" : ", unchecked"));
+        SCOPED_TRACE(::testing::Message()
+                     << "trial " << trial << ", n " << n << ", count " << count << ", "
+                     << to_string(method) << (batch.periodic ? ", periodic" : "")
+                     << (check ? "" : ", unchecked"));
         try {
           const auto x = run(batch, with(method, 0, check));
           for (std::ptrdiff_t s = 0; s < count; ++s)
@@ -857,8 +865,7 @@ TEST(ErrorMessages, NumericalErrorLeavesOutUnknownIndices) {
   EXPECT_STREQ(NumericalError(-1, 7, "x").what(), "tridiff: row 7: x");
   EXPECT_STREQ(NumericalError(-1, -1, "failed").what(), "tridiff: failed");
   EXPECT_EQ(NumericalError(-1, -1, "failed").row(), -1);
-  EXPECT_STREQ(InvalidArgument("n", "must be >= 1").what(),
-               "tridiff: argument 'n': must be >= 1");
+  EXPECT_STREQ(InvalidArgument("n", "must be >= 1").what(), "tridiff: argument 'n': must be >= 1");
 }
 
 // The method table: every Method once, names unique and found again by method_named, an

@@ -163,8 +163,7 @@ TYPED_TEST(Stability, ClassesAreDominantAsDeclared) {
     for (std::ptrdiff_t n : kSizes) {
       SCOPED_TRACE(::testing::Message() << "class " << matrix_class.name << ", n = " << n);
       const System<T> system = matrix_class.make<T>(n, kSeed + static_cast<std::uint64_t>(n));
-      EXPECT_EQ(dominant_by_rows_or_columns(system),
-                matrix_class.dominance == Dominance::Dominant);
+      EXPECT_EQ(dominant_by_rows_or_columns(system), matrix_class.dominance == Dominance::Dominant);
     }
   }
 }
@@ -233,14 +232,14 @@ TYPED_TEST(Stability, SingularMatricesRaiseNumericalErrorWhereLapackFails) {
     neumann.b.front() = neumann.b.back() = T(1);
     System<T> zero_row = random_nondominant_system<T>(n, kSeed);
     zero_row.b[0] = zero_row.c[0] = T(0);
-    for (const auto& [name, system] : {std::pair{"neumann_laplacian", neumann},
-                                       std::pair{"zero_first_row", zero_row}}) {
+    for (const auto& [name, system] :
+         {std::pair{"neumann_laplacian", neumann}, std::pair{"zero_first_row", zero_row}}) {
       const WideVector<T> no_reference = WideVector<T>::Zero(n);
       const Measurement lapack = measure_lapack(system, no_reference);
       ASSERT_EQ(lapack.outcome, Outcome::Singular) << name << ", n = " << n;
       for (Method method : kAllMethods) {
-        SCOPED_TRACE(::testing::Message() << name << ", n = " << n << ", method "
-                                          << to_string(method));
+        SCOPED_TRACE(::testing::Message()
+                     << name << ", n = " << n << ", method " << to_string(method));
         const Measurement ours = measure_tridiff(system, method, no_reference);
         const bool may_refuse = is_pivot_free(method) && !dominant_by_rows_or_columns(system);
         EXPECT_TRUE(ours.outcome == Outcome::Singular ||

@@ -107,8 +107,7 @@ inline std::ptrdiff_t differing_bits(const Image& a, const Image& b) {
   EXPECT_EQ(a.width(), b.width());
   EXPECT_EQ(a.height(), b.height());
   EXPECT_EQ(a.channels(), b.channels());
-  if (a.width() != b.width() || a.height() != b.height() || a.channels() != b.channels())
-    return -1;
+  if (a.width() != b.width() || a.height() != b.height() || a.channels() != b.channels()) return -1;
   std::ptrdiff_t differ = 0;
   for (int c = 0; c < a.channels(); ++c)
     for (std::ptrdiff_t y = 0; y < a.height(); ++y)

@@ -57,8 +57,9 @@ LinkField uniform(std::ptrdiff_t size, float beta) {
 }  // namespace
 
 int main() {
-  std::printf("| CoC D (px) | beta = D^2/32 | sigma ADI | sigma MPAD | sigma disc = D/4 |"
-              " r50 ADI | r50 MPAD | r50 disc | r90 ADI | r90 MPAD | r90 disc |\n");
+  std::printf(
+      "| CoC D (px) | beta = D^2/32 | sigma ADI | sigma MPAD | sigma disc = D/4 |"
+      " r50 ADI | r50 MPAD | r50 disc | r90 ADI | r90 MPAD | r90 disc |\n");
   std::printf("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
   for (float d : {2.f, 4.f, 8.f, 16.f, 32.f, 64.f}) {
     const std::ptrdiff_t size = std::ptrdiff_t(8 * d) + 65, c = size / 2;

@@ -65,8 +65,8 @@ struct SeedTable {
   double sigma[5];
 };
 constexpr SeedTable kSeedTables[] = {
-    {PyramidFilter::quasi, {1.5, 3.004808, 6.235577, 12.668269, 25.466346}},   // Table A.1
-    {PyramidFilter::box2, {1.139423, 2.24519, 4.51442, 9.34134, 18.71153}},    // Table A.2
+    {PyramidFilter::quasi, {1.5, 3.004808, 6.235577, 12.668269, 25.466346}},  // Table A.1
+    {PyramidFilter::box2, {1.139423, 2.24519, 4.51442, 9.34134, 18.71153}},   // Table A.2
     {PyramidFilter::box4, {1.504808, 3.25, 6.533654, 13.408654, 26.947115}},  // Table A.3
 };
 

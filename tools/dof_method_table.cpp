@@ -117,9 +117,10 @@ int measure(int argc, char** argv) {
     if (size == 0) size = row.width;
     if (threads == 0) threads = row.threads;
     if (row.width != size || row.height != size || row.threads != threads)
-      std::fprintf(stderr, "note: the %s row of '%s' was measured at %td^2, %d threads; now %td^2, "
-                   "%d threads\n", row.method.c_str(), row.scene.c_str(), row.width, row.threads,
-                   size, threads);
+      std::fprintf(stderr,
+                   "note: the %s row of '%s' was measured at %td^2, %d threads; now %td^2, "
+                   "%d threads\n",
+                   row.method.c_str(), row.scene.c_str(), row.width, row.threads, size, threads);
   }
   if (size == 0) size = 1024;
   if (threads == 0) threads = 2;
@@ -138,7 +139,8 @@ int measure(int argc, char** argv) {
                         threads);
     Image reference;
     DofReport report;
-    report = depth_of_field(reference, scene.color, scene.coc.plane(0), find_dof_method("scatter"), settings);
+    report = depth_of_field(reference, scene.color, scene.coc.plane(0), find_dof_method("scatter"),
+                            settings);
     for (const DofMethod& method : dof_methods()) {
       if (!measured_here(method.name)) continue;
       Image out;
@@ -151,8 +153,8 @@ int measure(int argc, char** argv) {
       row.has_near = tiles.has_near();
       row.work_fraction = tiles.work_fraction();
       row.seconds = run_seconds(method, scene, settings, out);
-      const DofError error = dof_error(out, reference, scene.color, scene.coc.plane(0),
-                                       settings.in_focus_coc_px);
+      const DofError error =
+          dof_error(out, reference, scene.color, scene.coc.plane(0), settings.in_focus_coc_px);
       row.psnr = error.psnr;
       row.ssim = error.ssim;
       std::fprintf(stderr, "%-16s %-14s %9.2f ms  PSNR %6.2f dB  SSIM %.4f\n", row.method.c_str(),
@@ -165,12 +167,11 @@ int measure(int argc, char** argv) {
   const std::string measured_at =
       "(" + std::to_string(size) + "^2, " + std::to_string(threads) + " threads)";
   const std::string csv =
-      only.empty()
-          ? "# The measured cost and error of every DOF method on the built-in scenes "
-            "(auto.hpp).\n# Regenerate: bash scripts/dof_method_table.sh " +
-                measured_at + "\n" + format_method_table(rows)
-          : comments + "# Re-measured alone: " + names + " " + measured_at + "\n" +
-                format_method_table(replace_rows(existing, rows));
+      only.empty() ? "# The measured cost and error of every DOF method on the built-in scenes "
+                     "(auto.hpp).\n# Regenerate: bash scripts/dof_method_table.sh " +
+                         measured_at + "\n" + format_method_table(rows)
+                   : comments + "# Re-measured alone: " + names + " " + measured_at + "\n" +
+                         format_method_table(replace_rows(existing, rows));
   if (output.empty()) {
     std::fputs(csv.c_str(), stdout);
     return 0;

@@ -56,9 +56,8 @@ int main() {
     const double column_time = seconds_since(start);
     const double bytes = 3.0 * sizeof(float) * n * n;  // beta and rhs read, x written
     if (repeat == 2)
-      std::printf("rows:    %7.2f ms  %6.1f GB/s\ncolumns: %7.2f ms  %6.1f GB/s\n",
-                  row_time * 1e3, bytes / row_time * 1e-9, column_time * 1e3,
-                  bytes / column_time * 1e-9);
+      std::printf("rows:    %7.2f ms  %6.1f GB/s\ncolumns: %7.2f ms  %6.1f GB/s\n", row_time * 1e3,
+                  bytes / row_time * 1e-9, column_time * 1e3, bytes / column_time * 1e-9);
   }
   tridiff::solve_diffusion(beta.data(), field.data(), x.data(), rows);
   std::printf("relative error of the row solve against double precision (64 rows): %.2e\n",

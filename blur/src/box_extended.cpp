@@ -16,13 +16,11 @@ namespace tridiff {
 
 double ExtendedBox::variance() const {
   const double r = static_cast<double>(radius);
-  return (r * (r + 1) * (2 * r + 1) / 3 + 2 * alpha * (r + 1) * (r + 1)) /
-         (2 * r + 1 + 2 * alpha);
+  return (r * (r + 1) * (2 * r + 1) / 3 + 2 * alpha * (r + 1) * (r + 1)) / (2 * r + 1 + 2 * alpha);
 }
 
 ExtendedBox extended_box(double sigma, int passes) {
-  if (!std::isfinite(sigma) || sigma < 0)
-    throw InvalidArgument("sigma", "must be finite and >= 0");
+  if (!std::isfinite(sigma) || sigma < 0) throw InvalidArgument("sigma", "must be finite and >= 0");
   if (passes < 1) throw InvalidArgument("passes", "must be >= 1");
   const double v = sigma * sigma / passes;  // the variance each pass must add
   const auto plain_variance = [](double r) { return r * (r + 1) / 3; };
@@ -31,8 +29,7 @@ ExtendedBox extended_box(double sigma, int passes) {
   while (plain_variance(double(r + 1)) <= v) ++r;
   while (r > 0 && plain_variance(double(r)) > v) --r;
   const double rd = static_cast<double>(r);
-  const double alpha =
-      (2 * rd + 1) * (v - plain_variance(rd)) / (2 * ((rd + 1) * (rd + 1) - v));
+  const double alpha = (2 * rd + 1) * (v - plain_variance(rd)) / (2 * ((rd + 1) * (rd + 1) - v));
   return {r, alpha};
 }
 

@@ -20,8 +20,7 @@ namespace tridiff {
 double box_variance(std::ptrdiff_t width) { return (double(width) * double(width) - 1) / 12; }
 
 std::vector<std::ptrdiff_t> box_widths(double sigma, int passes) {
-  if (!std::isfinite(sigma) || sigma < 0)
-    throw InvalidArgument("sigma", "must be finite and >= 0");
+  if (!std::isfinite(sigma) || sigma < 0) throw InvalidArgument("sigma", "must be finite and >= 0");
   if (passes < 1) throw InvalidArgument("passes", "must be >= 1");
   const double n = passes, target = 12 * sigma * sigma;  // 12 sigma^2 = sum of (w^2 - 1)
   auto lower = static_cast<std::ptrdiff_t>(std::floor(std::sqrt(target / n + 1)));
@@ -175,8 +174,7 @@ void filter_columns(ConstPlane in, Plane out, std::span<const BoxPass> passes, i
     for (std::ptrdiff_t s = 0; s < strips; ++s) {
       const std::ptrdiff_t x0 = s * kLanes, lanes = std::min<std::ptrdiff_t>(kLanes, w - x0);
       if (lanes == kLanes) {
-        run_passes(in.row(0) + x0, in.pitch(), out.row(0) + x0, out.pitch(), h, passes,
-                   scratch);
+        run_passes(in.row(0) + x0, in.pitch(), out.row(0) + x0, out.pitch(), h, passes, scratch);
         continue;
       }
       pad.assign(h * kLanes, 0.f);
@@ -200,8 +198,7 @@ void filter_rows(Plane plane, std::span<const BoxPass> passes, int threads) {
 }  // namespace
 
 void box_passes(Plane out, ConstPlane in, std::span<const BoxPass> passes, int threads) {
-  if (in.width() < 1 || in.height() < 1 || !in.data())
-    throw InvalidArgument("in", "is empty");
+  if (in.width() < 1 || in.height() < 1 || !in.data()) throw InvalidArgument("in", "is empty");
   if (out.width() != in.width() || out.height() != in.height())
     throw InvalidArgument("out", "size differs from in");
   if (threads < 0) throw InvalidArgument("threads", "must be >= 0 (0: all cores)");

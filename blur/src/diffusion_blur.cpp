@@ -50,8 +50,7 @@ void implicit_diffusion_blur(Plane out, ConstPlane in, double sigma, int steps, 
   LinkField beta(in.width(), in.height());
   const float b = static_cast<float>(sigma * sigma / (2.0 * steps));
   for (Plane links : {beta.horizontal(), beta.vertical()})
-    for (std::ptrdiff_t y = 0; y < links.height(); ++y)
-      std::fill_n(links.row(y), links.width(), b);
+    for (std::ptrdiff_t y = 0; y < links.height(); ++y) std::fill_n(links.row(y), links.width(), b);
   beta.finish(threads);
   Image image = single_plane(in);
   for (int s = 0; s < steps; ++s) diffuse_adi(image, image, beta, with_threads(threads));

@@ -119,8 +119,8 @@ std::shared_ptr<const Plans> plans_for(std::ptrdiff_t nx, std::ptrdiff_t ny, int
   const unsigned flags = FFTW_ESTIMATE;
   if (initialised) fftwf_plan_with_nthreads(threads);
   auto* complex = reinterpret_cast<fftwf_complex*>(scratch.get());
-  plans->forward = fftwf_plan_dft_r2c_2d(static_cast<int>(ny), static_cast<int>(nx),
-                                         scratch.get(), complex, flags);
+  plans->forward = fftwf_plan_dft_r2c_2d(static_cast<int>(ny), static_cast<int>(nx), scratch.get(),
+                                         complex, flags);
   plans->inverse = fftwf_plan_dft_c2r_2d(static_cast<int>(ny), static_cast<int>(nx), complex,
                                          scratch.get(), flags);
   if (!plans->forward || !plans->inverse)
@@ -263,14 +263,13 @@ void fft_convolve_separable(Plane out, ConstPlane in, std::span<const float> kx,
   // unnormalised inverse needs 1 / (nx ny).
   const auto tx = transfer_1d(kx, plans.nx, double(plans.nx));
   const auto ty = transfer_1d(ky, plans.ny, double(plans.ny));
-  multiply(plans, grid.buffer.get(), [&](std::ptrdiff_t u, std::ptrdiff_t v) {
-    return tx[u] * ty[v];
-  }, team);
+  multiply(
+      plans, grid.buffer.get(), [&](std::ptrdiff_t u, std::ptrdiff_t v) { return tx[u] * ty[v]; },
+      team);
   inverse(grid, sum_of(kx) * sum_of(ky), out, team);
 }
 
-void fft_convolve(Plane out, ConstPlane in, const Kernel2D& kernel, Border border,
-                  int threads) {
+void fft_convolve(Plane out, ConstPlane in, const Kernel2D& kernel, Border border, int threads) {
   blur_detail::check_convolution_planes(out, in, threads);
   blur_detail::check_kernel(kernel, "kernel");
   const int team = resolve_threads(threads);
@@ -293,9 +292,9 @@ void fft_convolve(Plane out, ConstPlane in, const Kernel2D& kernel, Border borde
   fftwf_execute_dft_r2c(plans.forward, filter.get(), filter_spectrum);
   const auto* h = reinterpret_cast<const std::complex<float>*>(filter.get());
   const std::ptrdiff_t cw = plans.complex_width();
-  multiply(plans, grid.buffer.get(), [&](std::ptrdiff_t u, std::ptrdiff_t v) {
-    return h[v * cw + u];
-  }, team);
+  multiply(
+      plans, grid.buffer.get(), [&](std::ptrdiff_t u, std::ptrdiff_t v) { return h[v * cw + u]; },
+      team);
   inverse(grid, sum_of(kernel.weights), out, team);
 }
 

@@ -29,7 +29,7 @@ namespace {
 
 constexpr double kTailMass = 2e-4;
 constexpr int kLanes = kVectorLanes;  // rows of a strip: one lane each in the row pass
-constexpr int kMaxRadius = 12;  // sigma <= 3 needs r <= 11: a window of 23 registers
+constexpr int kMaxRadius = 12;        // sigma <= 3 needs r <= 11: a window of 23 registers
 
 // out(j) = sum_t k[t] in(j + t), t in [0, 2R], for j in [0, n): in(i) and out(j) point at 16
 // floats. The kernel is symmetric (k[t] = k[2R - t]), so the two ends of the window are added
@@ -66,14 +66,16 @@ void filter_strip(ConstPlane in, Plane out, const float* k, std::ptrdiff_t y0) {
   for (std::ptrdiff_t x = 0; x < w; x += kLanes) {
     const std::ptrdiff_t n = std::min<std::ptrdiff_t>(kLanes, w - x);
     if (n == kLanes) {
-      slide<R>(k, kLanes, [&](int i) { return rows[i] + x; },
-               [&](std::ptrdiff_t j) { return block + j * kLanes; });
+      slide<R>(
+          k, kLanes, [&](int i) { return rows[i] + x; },
+          [&](std::ptrdiff_t j) { return block + j * kLanes; });
     } else {  // the last columns through a staging block: nothing past the row is read
       std::fill_n(staging, (kLanes + 2 * R) * kLanes, 0.f);
       for (int i = 0; i < kLanes + 2 * R; ++i)
         std::copy(rows[i] + x, rows[i] + w, staging + i * kLanes);
-      slide<R>(k, kLanes, [&](int i) { return staging + i * kLanes; },
-               [&](std::ptrdiff_t j) { return block + j * kLanes; });
+      slide<R>(
+          k, kLanes, [&](int i) { return staging + i * kLanes; },
+          [&](std::ptrdiff_t j) { return block + j * kLanes; });
     }
     detail::transpose_into_lanes<float, kLanes>(block, kLanes, n, lanes + (R + x) * kLanes);
   }
@@ -87,8 +89,9 @@ void filter_strip(ConstPlane in, Plane out, const float* k, std::ptrdiff_t y0) {
   const std::ptrdiff_t count = std::min<std::ptrdiff_t>(kLanes, h - y0);
   for (int l = 0; l < kLanes; ++l) out_rows[l] = l < count ? out.row(y0 + l) : staging;
   for (std::ptrdiff_t x = 0; x < w; x += kLanes) {
-    slide<R>(k, kLanes, [&](std::ptrdiff_t i) { return lanes + (x + i) * kLanes; },
-             [&](std::ptrdiff_t j) { return block + j * kLanes; });
+    slide<R>(
+        k, kLanes, [&](std::ptrdiff_t i) { return lanes + (x + i) * kLanes; },
+        [&](std::ptrdiff_t j) { return block + j * kLanes; });
     detail::scatter_from_lanes<float, kLanes>(block, std::min<std::ptrdiff_t>(kLanes, w - x),
                                               out_rows, x, true);
   }
@@ -114,8 +117,8 @@ constexpr std::array<PlaneFilter, sizeof...(I)> filters(std::index_sequence<I...
 void run_gaussian_fir(Plane out, ConstPlane in, const BlurOptions& options) {
   const std::ptrdiff_t r = gaussian_radius(options.sigma, kTailMass);
   if (r > kMaxRadius)  // the registry's sigma range keeps r within the compiled windows
-    throw InvalidArgument("sigma", "needs a radius of " + std::to_string(r) +
-                                               " > " + std::to_string(kMaxRadius));
+    throw InvalidArgument(
+        "sigma", "needs a radius of " + std::to_string(r) + " > " + std::to_string(kMaxRadius));
   const std::vector<float> k = gaussian_kernel(options.sigma, r);
   static constexpr auto kFilters = filters(std::make_index_sequence<kMaxRadius>());
   kFilters[r - 1](in, out, k.data(), resolve_threads(options.threads));

@@ -84,8 +84,12 @@ constexpr std::ptrdiff_t kStateFloats = sizeof(State) / sizeof(float);
 // The state of a sweep that starts on the edge value `edge` (replicate: the recursion's steady
 // state for a constant signal) or on zeros.
 State steady_state(Lanes edge, double gain_p, double gain_q) {
-  return {edge, edge, edge * static_cast<float>(gain_p), edge * static_cast<float>(gain_p),
-          edge * static_cast<float>(gain_q), edge * static_cast<float>(gain_q)};
+  return {edge,
+          edge,
+          edge * static_cast<float>(gain_p),
+          edge * static_cast<float>(gain_p),
+          edge * static_cast<float>(gain_q),
+          edge * static_cast<float>(gain_q)};
 }
 
 // Advances kVectors x kLanes signals by `n` steps along i, forward (causal, i = 0, 1, ...) or
@@ -185,12 +189,11 @@ void column_band(const ColumnRange& c, std::ptrdiff_t y, std::ptrdiff_t rows,
     float* dst = c.out.row(row) + c.x0;
     std::ptrdiff_t j = 0;
     for (; j + kColumnVectors <= c.vectors; j += kColumnVectors)
-      sweep<kCausal, kColumnVectors>(src + j * kLanes, in_pitch, dst + j * kLanes,
-                                     dst + j * kLanes, out_pitch, n, k,
-                                     c.state + j * kStateFloats);
+      sweep<kCausal, kColumnVectors>(src + j * kLanes, in_pitch, dst + j * kLanes, dst + j * kLanes,
+                                     out_pitch, n, k, c.state + j * kStateFloats);
     for (; j < c.vectors; ++j)
-      sweep<kCausal, 1>(src + j * kLanes, in_pitch, dst + j * kLanes, dst + j * kLanes,
-                        out_pitch, n, k, c.state + j * kStateFloats);
+      sweep<kCausal, 1>(src + j * kLanes, in_pitch, dst + j * kLanes, dst + j * kLanes, out_pitch,
+                        n, k, c.state + j * kStateFloats);
   }
 }
 
@@ -258,7 +261,7 @@ void run_iir_deriche(Plane out, ConstPlane in, const BlurOptions& options) {
       if (owns_strip)
         for (std::ptrdiff_t y = y0; y < y1; ++y)
           std::copy_n(strip_out.data() + y * kLanes, rest, out.row(y) + vectors * kLanes);
-      // Every column of the band is final: the rows pass may read the other threads' columns.
+          // Every column of the band is final: the rows pass may read the other threads' columns.
 #pragma omp barrier
       for (std::ptrdiff_t y = y0 + t * kRowBlock; y < y1; y += team * kRowBlock)
         filter_row_block<kRowBlock>(out, y, rows_pass);

@@ -72,8 +72,8 @@ std::vector<float> bilinear_box_kernel() { return {0.f, 0.5f, 0.5f}; }
 Kernel2D outer_product(std::span<const float> kx, std::span<const float> ky) {
   blur_detail::check_kernel(kx, "kx");
   blur_detail::check_kernel(ky, "ky");
-  Kernel2D kernel{static_cast<std::ptrdiff_t>(kx.size()), static_cast<std::ptrdiff_t>(ky.size()),
-                  {}};
+  Kernel2D kernel{
+      static_cast<std::ptrdiff_t>(kx.size()), static_cast<std::ptrdiff_t>(ky.size()), {}};
   kernel.weights.reserve(kx.size() * ky.size());
   for (float wy : ky)
     for (float wx : kx) kernel.weights.push_back(static_cast<float>(double(wx) * double(wy)));
@@ -95,16 +95,14 @@ Kernel2D bilinear_box_kernel_2d() {
 namespace blur_detail {
 
 void check_convolution_planes(ConstPlane out, ConstPlane in, int threads) {
-  if (in.width() < 1 || in.height() < 1 || !in.data())
-    throw InvalidArgument("in", "is empty");
+  if (in.width() < 1 || in.height() < 1 || !in.data()) throw InvalidArgument("in", "is empty");
   if (out.width() != in.width() || out.height() != in.height() || !out.data())
-    throw InvalidArgument("out", "is " + std::to_string(out.width()) + " x " +
-                              std::to_string(out.height()) + ", in is " +
-                              std::to_string(in.width()) + " x " + std::to_string(in.height()));
+    throw InvalidArgument(
+        "out", "is " + std::to_string(out.width()) + " x " + std::to_string(out.height()) +
+                   ", in is " + std::to_string(in.width()) + " x " + std::to_string(in.height()));
   const float* in_end = in.row(in.height() - 1) + in.width();
   const float* out_end = out.row(out.height() - 1) + out.width();
-  if (in.data() < out_end && out.data() < in_end)
-    throw InvalidArgument("out", "overlaps in");
+  if (in.data() < out_end && out.data() < in_end) throw InvalidArgument("out", "overlaps in");
   if (threads < 0) throw InvalidArgument("threads", "must be >= 0 (0: all cores)");
 }
 
@@ -118,8 +116,8 @@ void check_weights(std::span<const float> weights, const char* name) {
 void check_kernel(std::span<const float> kernel, const char* name) {
   if (kernel.empty()) throw InvalidArgument(name, "is empty");
   if (kernel.size() % 2 == 0)
-    throw InvalidArgument(name, "must have odd length (2r + 1, centred), got " +
-                              std::to_string(kernel.size()));
+    throw InvalidArgument(
+        name, "must have odd length (2r + 1, centred), got " + std::to_string(kernel.size()));
   check_weights(kernel, name);
 }
 
@@ -128,12 +126,12 @@ void check_kernel(const Kernel2D& kernel, const char* name) {
     throw InvalidArgument(name, "is empty");
   if (kernel.width % 2 == 0 || kernel.height % 2 == 0)
     throw InvalidArgument(name, "must be odd in both directions (centred), got " +
-                              std::to_string(kernel.width) + " x " +
-                              std::to_string(kernel.height));
+                                    std::to_string(kernel.width) + " x " +
+                                    std::to_string(kernel.height));
   if (static_cast<std::ptrdiff_t>(kernel.weights.size()) != kernel.width * kernel.height)
     throw InvalidArgument(name, "has " + std::to_string(kernel.weights.size()) +
-                              " weights, width x height is " +
-                              std::to_string(kernel.width * kernel.height));
+                                    " weights, width x height is " +
+                                    std::to_string(kernel.width * kernel.height));
   check_weights(kernel.weights, name);
 }
 
@@ -198,8 +196,7 @@ std::ptrdiff_t tap_chunk(std::ptrdiff_t taps) {
 }
 
 // out[l] = sum_t k[t] src[t][x0 + l], l in [0, kBlock).
-inline void sum_block(const float* const* src, const Taps& taps, std::ptrdiff_t x0,
-                      float* out) {
+inline void sum_block(const float* const* src, const Taps& taps, std::ptrdiff_t x0, float* out) {
   const std::ptrdiff_t n = taps.size();
   const bool folded = taps.symmetric;
   const std::ptrdiff_t terms = folded ? n / 2 : n, chunk = tap_chunk(terms);

@@ -210,12 +210,12 @@ SpreadingKernel spreading_kernel_for_sigma(double sigma) {
 void polynomial_spread(Plane out, ConstPlane in, const SpreadingKernel& kernel, Border border,
                        int threads) {
   check_kernel(kernel);
-  if (in.width() < 1 || in.height() < 1 || !in.data())
-    throw InvalidArgument("in", "is empty");
+  if (in.width() < 1 || in.height() < 1 || !in.data()) throw InvalidArgument("in", "is empty");
   if (out.width() != in.width() || out.height() != in.height())
     throw InvalidArgument("out", "size differs from in");
   if (border != Border::replicate && border != Border::zero)
-    throw InvalidArgument("border", std::string(border_name(border)) +
+    throw InvalidArgument("border",
+                          std::string(border_name(border)) +
                               " is not supported by polynomial spreading (replicate, zero)");
   if (threads < 0) throw InvalidArgument("threads", "must be >= 0 (0: all cores)");
   const bool replicate = border == Border::replicate;

@@ -50,9 +50,7 @@ struct Range {
 // exact; the margins settle at 2 to 3 pixels a side whatever the level. These ranges also
 // cover every coarse pixel the up-sampling of [fine.lo, fine.hi) reads
 // (floor(fine.lo / 2) - 1 to ceil(fine.hi / 2)), so the synthesis never clamps.
-Range coarser(Range fine) {
-  return {floor_half(fine.lo - 2), -floor_half(-fine.hi) + 1};
-}
+Range coarser(Range fine) { return {floor_half(fine.lo - 2), -floor_half(-fine.hi) + 1}; }
 
 // A level of the pyramid: its stored pixels, grid index (x, y) at image(x - x.lo, y - y.lo).
 struct Level {
@@ -69,9 +67,7 @@ struct GridView {
   ConstPlane plane;
   Range x, y;
   // Row `grid_y` (clamped), shifted so that element [grid_x] is column grid_x.
-  const float* row(std::ptrdiff_t grid_y) const {
-    return plane.row(y.clamp(grid_y) - y.lo) - x.lo;
-  }
+  const float* row(std::ptrdiff_t grid_y) const { return plane.row(y.clamp(grid_y) - y.lo) - x.lo; }
 };
 
 // A row buffer addressed by grid index over [range.lo - pad, range.hi + pad), the stored
@@ -105,7 +101,8 @@ void down_sample(const GridView& fine, Level& coarse, AnalysisTaps taps, int thr
   {
     // The horizontal taps reach fine columns 2 x_lo - 1 to 2 x_hi; beyond the fine range
     // (by up to 3, more when the coarse level is widened for smoothing) they read padding.
-    const std::ptrdiff_t pad = std::max({std::ptrdiff_t{1}, fx.lo - (2 * x_lo - 1), 2 * x_hi - (fx.hi - 1)});
+    const std::ptrdiff_t pad =
+        std::max({std::ptrdiff_t{1}, fx.lo - (2 * x_lo - 1), 2 * x_hi - (fx.hi - 1)});
     PaddedRow buffer(fx, pad);
     float* v = buffer.at_grid();
 #pragma omp for schedule(static)
@@ -192,9 +189,7 @@ void smooth_rows(ConstPlane in, Plane out, float a, int threads) {
 }
 
 // The passes of the 3-tap smoothing for a variance sigma^2: each adds 2a <= 1/2.
-int smoothing_passes(double sigma) {
-  return static_cast<int>(std::ceil(sigma * sigma / 0.5));
-}
+int smoothing_passes(double sigma) { return static_cast<int>(std::ceil(sigma * sigma / 0.5)); }
 
 // Smooths `plane` in place by a separable filter of variance sigma^2 per axis: passes of the
 // 3-tap [a, 1 - 2a, a] (variance 2a each), a <= 1/4 so that every pass is a non-negative,
@@ -242,21 +237,20 @@ bool overlap(ConstPlane a, ConstPlane b) {
   return a.data() < b_end && b.data() < a_end;
 }
 
-void check_arguments(ConstPlane in, ConstPlane out, int levels, double coarse_sigma,
-                     Border border, int threads) {
-  if (in.width() < 1 || in.height() < 1 || !in.data())
-    throw InvalidArgument("in", "is empty");
+void check_arguments(ConstPlane in, ConstPlane out, int levels, double coarse_sigma, Border border,
+                     int threads) {
+  if (in.width() < 1 || in.height() < 1 || !in.data()) throw InvalidArgument("in", "is empty");
   if (out.width() != in.width() || out.height() != in.height() || !out.data())
     throw InvalidArgument("out", "size differs from in");
   if (overlap(in, out)) throw InvalidArgument("out", "overlaps in");
   if (levels < 0 || levels > kMaxLevels)
-    throw InvalidArgument("levels", std::to_string(levels) + " is not in [0, " +
-                              std::to_string(kMaxLevels) + "]");
+    throw InvalidArgument(
+        "levels", std::to_string(levels) + " is not in [0, " + std::to_string(kMaxLevels) + "]");
   if (!std::isfinite(coarse_sigma) || coarse_sigma < 0)
     throw InvalidArgument("coarse_sigma", "must be finite and >= 0");
   if (border != Border::replicate)
     throw InvalidArgument("border", std::string(border_name(border)) +
-                              " is not supported by the pyramid blur (replicate only)");
+                                        " is not supported by the pyramid blur (replicate only)");
   if (threads < 0) throw InvalidArgument("threads", "must be >= 0 (0: all cores)");
 }
 
@@ -290,8 +284,8 @@ std::string_view pyramid_filter_name(PyramidFilter filter) {
   return "unknown";
 }
 
-void pyramid_blur(Plane out, ConstPlane in, PyramidFilter filter, int levels,
-                  double coarse_sigma, Border border, int threads) {
+void pyramid_blur(Plane out, ConstPlane in, PyramidFilter filter, int levels, double coarse_sigma,
+                  Border border, int threads) {
   check_arguments(in, out, levels, coarse_sigma, border, threads);
   const AnalysisTaps taps = analysis_taps(filter);
   const int team = resolve_threads(threads);
@@ -338,8 +332,8 @@ PyramidPlan pyramid_plan(PyramidFilter filter, double sigma) {
   const double smallest = pyramid_sigma(filter, 1);
   if (!std::isfinite(sigma) || sigma < smallest)
     throw InvalidArgument("sigma", "must be finite and >= " + std::to_string(smallest) +
-                              ", the sigma of one " + std::string(pyramid_filter_name(filter)) +
-                              " pyramid level");
+                                       ", the sigma of one " +
+                                       std::string(pyramid_filter_name(filter)) + " pyramid level");
   PyramidPlan plan;
   // Sigma roughly doubles per level: this loop runs about log2(sigma) times.
   while (pyramid_sigma(filter, plan.levels + 1) <= sigma) ++plan.levels;
@@ -349,8 +343,8 @@ PyramidPlan pyramid_plan(PyramidFilter filter, double sigma) {
   return plan;
 }
 
-void pyramid_blur_sigma(Plane out, ConstPlane in, PyramidFilter filter, double sigma,
-                        Border border, int threads) {
+void pyramid_blur_sigma(Plane out, ConstPlane in, PyramidFilter filter, double sigma, Border border,
+                        int threads) {
   const PyramidPlan plan = pyramid_plan(filter, sigma);
   pyramid_blur(out, in, filter, plan.levels, plan.coarse_sigma, border, threads);
 }
@@ -358,16 +352,13 @@ void pyramid_blur_sigma(Plane out, ConstPlane in, PyramidFilter filter, double s
 namespace blur_detail {
 
 void run_pyramid_box2(Plane out, ConstPlane in, const BlurOptions& options) {
-  pyramid_blur_sigma(out, in, PyramidFilter::box2, options.sigma, options.border,
-                     options.threads);
+  pyramid_blur_sigma(out, in, PyramidFilter::box2, options.sigma, options.border, options.threads);
 }
 void run_pyramid_box4(Plane out, ConstPlane in, const BlurOptions& options) {
-  pyramid_blur_sigma(out, in, PyramidFilter::box4, options.sigma, options.border,
-                     options.threads);
+  pyramid_blur_sigma(out, in, PyramidFilter::box4, options.sigma, options.border, options.threads);
 }
 void run_pyramid_quasi(Plane out, ConstPlane in, const BlurOptions& options) {
-  pyramid_blur_sigma(out, in, PyramidFilter::quasi, options.sigma, options.border,
-                     options.threads);
+  pyramid_blur_sigma(out, in, PyramidFilter::quasi, options.sigma, options.border, options.threads);
 }
 
 }  // namespace blur_detail

@@ -36,8 +36,8 @@ double mean_ssim(const DoublePlane& a, const DoublePlane& b) {
     const double ma = mu_a.values[i], mb = mu_b.values[i];
     const double var_a = m_aa.values[i] - ma * ma, var_b = m_bb.values[i] - mb * mb;
     const double cov = m_ab.values[i] - ma * mb;
-    sum += (2 * ma * mb + kC1) * (2 * cov + kC2) /
-           ((ma * ma + mb * mb + kC1) * (var_a + var_b + kC2));
+    sum +=
+        (2 * ma * mb + kC1) * (2 * cov + kC2) / ((ma * ma + mb * mb + kC1) * (var_a + var_b + kC2));
   }
   return sum / static_cast<double>(a.values.size());
 }
@@ -78,9 +78,8 @@ double operator_norm_error(const PlaneBlur& blur_plane, double sigma) {
   for (std::ptrdiff_t y = 0; y < n; ++y)
     for (std::ptrdiff_t x = 0; x < n; ++x) {
       const std::ptrdiff_t dx = x - centre, dy = y - centre;
-      const double exact = std::abs(dx) <= r && std::abs(dy) <= r
-                               ? kernel[dx + r] * kernel[dy + r]
-                               : 0.0;
+      const double exact =
+          std::abs(dx) <= r && std::abs(dy) <= r ? kernel[dx + r] * kernel[dy + r] : 0.0;
       norm += std::abs(response(x, y, 0) - exact);
     }
   return norm;
@@ -118,9 +117,9 @@ Image pattern_discs(std::ptrdiff_t n, std::mt19937& rng) {
 Image pattern_lines(std::ptrdiff_t n) {
   Image image(n, n, 1);
   for (std::ptrdiff_t i = 0; i < n; ++i) {
-    image(i, n / 3, 0) = 1;          // horizontal
-    image(2 * n / 3, i, 0) = 1;      // vertical
-    image(i, i, 0) = 1;              // diagonal
+    image(i, n / 3, 0) = 1;            // horizontal
+    image(2 * n / 3, i, 0) = 1;        // vertical
+    image(i, i, 0) = 1;                // diagonal
     image(i, (n - 1 - i / 2), 0) = 1;  // shallow slope
   }
   return image;
@@ -146,7 +145,8 @@ Image pattern_texture(std::ptrdiff_t n, std::mt19937& rng) {
     for (std::ptrdiff_t y = 0; y < n; ++y)
       for (std::ptrdiff_t x = 0; x < n; ++x) {
         const double gx = static_cast<double>(x) / spacing, gy = static_cast<double>(y) / spacing;
-        const std::ptrdiff_t ix = static_cast<std::ptrdiff_t>(gx), iy = static_cast<std::ptrdiff_t>(gy);
+        const std::ptrdiff_t ix = static_cast<std::ptrdiff_t>(gx),
+                             iy = static_cast<std::ptrdiff_t>(gy);
         const double fx = gx - ix, fy = gy - iy;
         const double top = grid[iy * cells + ix] * (1 - fx) + grid[iy * cells + ix + 1] * fx;
         const double bottom =

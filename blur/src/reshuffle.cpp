@@ -26,22 +26,22 @@ std::ptrdiff_t ReshuffledKernel::taps() const {
 
 namespace {
 
-void check_kernel_shape(std::span<const double> kernel, std::ptrdiff_t width,
-                        std::ptrdiff_t height, int levels) {
+void check_kernel_shape(std::span<const double> kernel, std::ptrdiff_t width, std::ptrdiff_t height,
+                        int levels) {
   if (kernel.empty()) throw InvalidArgument("kernel", "is empty");
   if (width < 1 || width % 2 == 0)
-    throw InvalidArgument("width", "must be odd and >= 1 (the kernel is centred), got " +
-                              std::to_string(width));
+    throw InvalidArgument(
+        "width", "must be odd and >= 1 (the kernel is centred), got " + std::to_string(width));
   if (height < 1 || height % 2 == 0)
-    throw InvalidArgument("height", "must be odd and >= 1 (the kernel is centred), got " +
-                              std::to_string(height));
+    throw InvalidArgument(
+        "height", "must be odd and >= 1 (the kernel is centred), got " + std::to_string(height));
   if (static_cast<std::ptrdiff_t>(kernel.size()) != width * height)
-    throw InvalidArgument("kernel", "has " + std::to_string(kernel.size()) + " weights, width x height is " +
-                              std::to_string(width * height));
+    throw InvalidArgument("kernel", "has " + std::to_string(kernel.size()) +
+                                        " weights, width x height is " +
+                                        std::to_string(width * height));
   for (double w : kernel)
     if (!std::isfinite(w)) throw InvalidArgument("kernel", "has a non-finite weight");
-  if (levels < 0)
-    throw InvalidArgument("levels", "must be >= 0 (0: exact weights)");
+  if (levels < 0) throw InvalidArgument("levels", "must be >= 0 (0: exact weights)");
 }
 
 // Every weight rounded to a multiple of max|w| / levels; levels = 0 leaves them as they are.
@@ -56,8 +56,7 @@ std::vector<double> quantised(std::span<const double> kernel, int levels) {
 }
 
 void check_planes(ConstPlane in, ConstPlane out, int threads) {
-  if (in.width() < 1 || in.height() < 1 || !in.data())
-    throw InvalidArgument("in", "is empty");
+  if (in.width() < 1 || in.height() < 1 || !in.data()) throw InvalidArgument("in", "is empty");
   if (out.width() != in.width() || out.height() != in.height())
     throw InvalidArgument("out", "size differs from in");
   if (threads < 0) throw InvalidArgument("threads", "must be >= 0 (0: all cores)");
@@ -76,9 +75,8 @@ void extend_line(const float* line, std::ptrdiff_t n, std::ptrdiff_t pad, Border
 // source(link)[x]. source(link) is the input row (already offset by the link's dx) a link
 // reads, or null for a row beyond a zero border.
 template <class SourceOf>
-void reshuffled_row(const ReshuffledKernel& kernel, std::ptrdiff_t width,
-                    const SourceOf& source_of, std::vector<float>& sum,
-                    std::vector<double>& acc, float* out) {
+void reshuffled_row(const ReshuffledKernel& kernel, std::ptrdiff_t width, const SourceOf& source_of,
+                    std::vector<float>& sum, std::vector<double>& acc, float* out) {
   acc.assign(width, 0.0);
   for (std::size_t i = 0; i < kernel.weights.size(); ++i) {
     sum.assign(width, 0.f);
@@ -145,7 +143,8 @@ ReshuffledKernel reshuffle_kernel(std::span<const double> kernel, std::ptrdiff_t
       if (const double w = weights[j * width + i]; w != 0)
         sets[w].push_back({cx - i, cy - j});  // convolution: the input lies opposite the tap
   if (sets.empty())
-    throw InvalidArgument(levels ? "levels" : "kernel", levels ? "quantises every weight to zero" : "is all zero");
+    throw InvalidArgument(levels ? "levels" : "kernel",
+                          levels ? "quantises every weight to zero" : "is all zero");
   ReshuffledKernel out;
   out.radius_x = cx;
   out.radius_y = cy;

@@ -6,14 +6,12 @@
 #include <algorithm>
 #include <string>
 
-
 namespace tridiff {
 
 namespace {
 
 void check_input(ConstPlane in) {
-  if (in.width() < 1 || in.height() < 1 || !in.data())
-    throw InvalidArgument("in", "is empty");
+  if (in.width() < 1 || in.height() < 1 || !in.data()) throw InvalidArgument("in", "is empty");
 }
 
 // The prefix sum P(i) = x[clamp 0] + ... + x[clamp i] of a line of n pixels extended by the
@@ -52,8 +50,8 @@ double replicate_sum(const Table& t, std::ptrdiff_t x0, std::ptrdiff_t y0, std::
   const std::ptrdiff_t w = t.width(), h = t.height();
   const ExtendedPrefix left = extended_prefix(x0 - 1, w), right = extended_prefix(x1, w);
   const ExtendedPrefix top = extended_prefix(y0 - 1, h), bottom = extended_prefix(y1, h);
-  return extended_at(t, right, bottom) - extended_at(t, left, bottom) -
-         extended_at(t, right, top) + extended_at(t, left, top);
+  return extended_at(t, right, bottom) - extended_at(t, left, bottom) - extended_at(t, right, top) +
+         extended_at(t, left, top);
 }
 
 template <class Table>
@@ -126,8 +124,8 @@ SummedAreaTable::SummedAreaTable(ConstPlane in, int threads) {
   }
 }
 
-double SummedAreaTable::replicate_box_sum(std::ptrdiff_t x0, std::ptrdiff_t y0,
-                                          std::ptrdiff_t x1, std::ptrdiff_t y1) const {
+double SummedAreaTable::replicate_box_sum(std::ptrdiff_t x0, std::ptrdiff_t y0, std::ptrdiff_t x1,
+                                          std::ptrdiff_t y1) const {
   return replicate_sum(*this, x0, y0, x1, y1);
 }
 

@@ -66,21 +66,22 @@ void require_finite(const Image& src) {
       for (std::ptrdiff_t x = 0; x < plane.width(); ++x)
         if (!std::isfinite(plane(x, y)))
           throw InvalidArgument("src", "pixel (" + std::to_string(x) + ", " + std::to_string(y) +
-                                    "), channel " + std::to_string(c) + ": is not finite");
+                                           "), channel " + std::to_string(c) + ": is not finite");
   }
 }
 
 void require_stable(const LinkField& kappa) {
   if (kappa.max_link() > kExplicitStabilityBound)
-    throw InvalidArgument("kappa", "largest link conductance " + std::to_string(kappa.max_link()) +
+    throw InvalidArgument("kappa",
+                          "largest link conductance " + std::to_string(kappa.max_link()) +
                               " exceeds the explicit stability bound 0.25 (seed 001 §3.9); "
                               "use diffuse_explicit, which sub-steps");
 }
 
 // `steps` steps of one plane; both buffers start as src so that tiles that never move hold
 // the right values in either buffer without being copied.
-std::ptrdiff_t run_steps(Plane dst, ConstPlane src, const LinkField& kappa, int steps,
-                         bool skip, int threads, const std::function<void(int)>& stepped) {
+std::ptrdiff_t run_steps(Plane dst, ConstPlane src, const LinkField& kappa, int steps, bool skip,
+                         int threads, const std::function<void(int)>& stepped) {
   const std::ptrdiff_t width = src.width(), height = src.height();
   Image spare(width, height, 1);
   Plane ping = dst, pong = spare.plane(0);
@@ -172,8 +173,9 @@ DiffusionReport diffuse_explicit(Image& dst, const Image& src, const LinkField& 
 void diffuse_isotropic(Image& dst, const Image& src, float c, int iterations,
                        const DiffusionOptions& options) {
   if (!(c > 0 && c <= kExplicitStabilityBound))
-    throw InvalidArgument("c", std::to_string(c) + " is outside (0, 0.25], the range where the "
-                                              "explicit step is stable (seed 001 §3.9)");
+    throw InvalidArgument("c", std::to_string(c) +
+                                   " is outside (0, 0.25], the range where the "
+                                   "explicit step is stable (seed 001 §3.9)");
   LinkField kappa(src.width(), src.height());
   for (Plane p : {kappa.horizontal(), kappa.vertical()})
     for (std::ptrdiff_t y = 0; y < p.height(); ++y) std::fill(p.row(y), p.row(y) + p.width(), c);
@@ -182,7 +184,8 @@ void diffuse_isotropic(Image& dst, const Image& src, float c, int iterations,
 }
 
 int isotropic_iterations_for_sigma(float sigma, float c) {
-  if (!(sigma >= 0) || !std::isfinite(sigma)) throw InvalidArgument("sigma", "must be finite and >= 0");
+  if (!(sigma >= 0) || !std::isfinite(sigma))
+    throw InvalidArgument("sigma", "must be finite and >= 0");
   if (!(c > 0 && c <= kExplicitStabilityBound)) throw InvalidArgument("c", "must be in (0, 0.25]");
   return int(std::ceil(double(sigma) * sigma / (2.0 * c) - 1e-9));
 }

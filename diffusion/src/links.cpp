@@ -20,7 +20,8 @@ namespace {
 
 void require_valid_link(float link, const char* direction, std::ptrdiff_t x, std::ptrdiff_t y) {
   if (std::isfinite(link) && link >= 0) return;
-  throw InvalidArgument(std::string(direction) + " link", "at pixel (" + std::to_string(x) + ", " + std::to_string(y) + ") is " +
+  throw InvalidArgument(std::string(direction) + " link",
+                        "at pixel (" + std::to_string(x) + ", " + std::to_string(y) + ") is " +
                             std::to_string(link) + "; conductances must be finite and >= 0");
 }
 
@@ -35,8 +36,10 @@ void LinkField::finish(int threads) {
 
   float largest = 0;
   bool invalid = false;
+// clang-format off
 #pragma omp parallel for num_threads(team) schedule(static) reduction(max : largest) \
     reduction(|| : invalid)
+  // clang-format on
   for (std::ptrdiff_t ty = 0; ty < tiles_y_; ++ty) {
     for (std::ptrdiff_t tx = 0; tx < tiles_x_; ++tx) {
       // probe = sum of 0 * link: zero unless a link is NaN or infinite (inf * 0 is NaN).

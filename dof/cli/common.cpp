@@ -102,8 +102,8 @@ Arguments parse(int argc, char** argv, int first, const std::vector<std::string>
       throw InvalidArgument("--" + key, "unknown option (see tridiff --help)");
     if (i + 1 >= argc) throw InvalidArgument("--" + key, "needs a value");
     if (args.has(key))
-      throw InvalidArgument("--" + key, "is given twice ('" + args.text(key, "") + "' and '" + argv[i + 1] +
-                                "')" + alias);
+      throw InvalidArgument("--" + key, "is given twice ('" + args.text(key, "") + "' and '" +
+                                            argv[i + 1] + "')" + alias);
     args.values[key] = argv[++i];
   }
   return args;
@@ -122,7 +122,8 @@ DepthConvention parse_convention(const std::string& text) {
   if (text == "linear") return DepthConvention::Linear;
   if (text == "normalized") return DepthConvention::Normalized;
   if (text == "inverse") return DepthConvention::Inverse;
-  throw InvalidArgument("--depth-convention", "'" + text + "' is not linear, normalized or inverse");
+  throw InvalidArgument("--depth-convention",
+                        "'" + text + "' is not linear, normalized or inverse");
 }
 
 double seconds_since(std::chrono::steady_clock::time_point start) {
@@ -157,9 +158,9 @@ void load_images(const Arguments& args, int threads, Frame& frame, ThinLens& len
     if (!args.has("depth")) throw InvalidArgument("--depth", "is required with --color");
     const ColorEncoding encoding = parse_encoding(args.text("color-encoding", "auto"));
     frame.color = with_stderr_muted([&] {
-                    return read_color(args.text("color", ""), {.encoding = encoding,
-                                                               .max_pixels = max_pixels(args),
-                                                               .threads = threads});
+                    return read_color(
+                        args.text("color", ""),
+                        {.encoding = encoding, .max_pixels = max_pixels(args), .threads = threads});
                   }).pixels;
     DepthOptions depth_options;
     depth_options.channel = args.text("depth-channel", "");
@@ -167,7 +168,8 @@ void load_images(const Arguments& args, int threads, Frame& frame, ThinLens& len
     depth_options.near_plane = args.number("near", 0.f);
     depth_options.far_plane = args.number("far", 0.f);
     depth_options.max_pixels = max_pixels(args);
-    frame.depth = with_stderr_muted([&] { return read_depth(args.text("depth", ""), depth_options); });
+    frame.depth =
+        with_stderr_muted([&] { return read_depth(args.text("depth", ""), depth_options); });
     if (frame.depth.width() != frame.color.width() || frame.depth.height() != frame.color.height())
       throw ImageIoError("tridiff: " + args.text("depth", "") + ": depth is " +
                          std::to_string(frame.depth.width()) + " x " +
@@ -203,9 +205,9 @@ void with_options_named(const std::function<void()>& work) {
   with_fields_as_options(kInputOptions, work);
 }
 
-const std::vector<std::string> kLensOptions = {"focus", "f-number", "focal-length",
-                                               "sensor-width", "max-coc"};
-const std::vector<std::string> kCurveOptions = {"near-start", "near-end", "far-start",
+const std::vector<std::string> kLensOptions = {"focus", "f-number", "focal-length", "sensor-width",
+                                               "max-coc"};
+const std::vector<std::string> kCurveOptions = {"near-start", "near-end",    "far-start",
                                                 "far-end",    "near-radius", "far-radius"};
 
 // The first of `keys` on the command line, or "".
@@ -233,7 +235,8 @@ void compute_coc(const Arguments& args, int threads, ThinLens lens, Frame& frame
   std::ostringstream model;
   if (curve) {
     const ArtistCurve c = artist_curve(args);
-    with_options_named([&] { coc_artist_curve(frame.coc.plane(0), frame.depth.plane(0), c, threads); });
+    with_options_named(
+        [&] { coc_artist_curve(frame.coc.plane(0), frame.depth.plane(0), c, threads); });
     model << "artist curve: near " << c.near_start_m << "-" << c.near_end_m << " m radius "
           << c.near_radius_px << " px, far " << c.far_start_m << "-" << c.far_end_m << " m radius "
           << c.far_radius_px << " px";
@@ -243,7 +246,8 @@ void compute_coc(const Arguments& args, int threads, ThinLens lens, Frame& frame
     lens.focal_length_mm = args.number("focal-length", lens.focal_length_mm);
     lens.sensor_width_mm = args.number("sensor-width", lens.sensor_width_mm);
     lens.max_coc_px = args.number("max-coc", lens.max_coc_px);
-    with_options_named([&] { coc_thin_lens(frame.coc.plane(0), frame.depth.plane(0), lens, threads); });
+    with_options_named(
+        [&] { coc_thin_lens(frame.coc.plane(0), frame.depth.plane(0), lens, threads); });
     model << "thin lens: focus " << lens.focus_distance_m << " m, f/" << lens.f_number << ", "
           << lens.focal_length_mm << " mm, sensor " << lens.sensor_width_mm << " mm, max CoC "
           << lens.max_coc_px << " px";
@@ -257,13 +261,15 @@ void check_input_options(const Arguments& args) {
   if (args.has("color"))
     for (const char* key : {"width", "height"})
       if (args.has(key))
-        throw InvalidArgument("--" + std::string(key), "sizes the built-in scene and cannot be used with --color (the "
+        throw InvalidArgument("--" + std::string(key),
+                              "sizes the built-in scene and cannot be used with --color (the "
                               "image has its own size)");
   const std::string curve = first_given(args, kCurveOptions);
   if (curve.empty()) return;
   const std::string lens = first_given(args, kLensOptions);
   if (!lens.empty())
-    throw InvalidArgument("--" + lens, "is a thin-lens option, but --" + curve +
+    throw InvalidArgument("--" + lens,
+                          "is a thin-lens option, but --" + curve +
                               " chooses the artist curve, which replaces the lens: give one "
                               "or the other");
   with_options_named([&] { validate(artist_curve(args)); });
@@ -299,7 +305,8 @@ void with_coc_named(const Arguments& args, const std::function<void()>& work) {
     // A method refuses the CoC map (too large for it): the map is the one the options made.
     if (error.argument() != "coc") throw;
     if (first_given(args, kCurveOptions).empty())
-      throw InvalidArgument("--max-coc", error.message() + " (the lens's CoC, clamped at --max-coc: lower it)");
+      throw InvalidArgument("--max-coc",
+                            error.message() + " (the lens's CoC, clamped at --max-coc: lower it)");
     std::string options;
     for (const char* key : {"near-radius", "far-radius"})
       if (args.has(key)) options += (options.empty() ? "--" : "/--") + std::string(key);

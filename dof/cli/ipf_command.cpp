@@ -104,8 +104,7 @@ ipf::FramePlan plan_as_options(std::ptrdiff_t width, std::ptrdiff_t height,
 // with its square) and what else makes it.
 void check_model_cost(std::ptrdiff_t width, std::ptrdiff_t height,
                       const ipf::PerformanceInput& hardware, int threads) {
-  const ipf::ModelCost cost =
-      ipf::model_cost(plan_as_options(width, height, hardware), threads);
+  const ipf::ModelCost cost = ipf::model_cost(plan_as_options(width, height, hardware), threads);
   std::ostringstream text;
   text << "a " << width << " x " << height << " frame at mask " << hardware.mask << " in "
        << hardware.parts << " part(s) ";
@@ -201,22 +200,23 @@ IpfPlan plan_ipf(const Arguments& args) {
   const int mask = plan.mask = args.integer("mask", 17);
   if (mask < 3 || mask % 2 == 0 || mask > ipf::kMaxMask)
     throw InvalidArgument("--mask", "must be odd and in [3, " + std::to_string(ipf::kMaxMask) +
-                              "] (fig. 10's 8-bit Radius reaches 255 pixels), got " +
-                              std::to_string(mask));
+                                        "] (fig. 10's 8-bit Radius reaches 255 pixels), got " +
+                                        std::to_string(mask));
   const int parts = plan.parts = args.integer("parts", 4);
   if (parts < 1 || parts > kMaxParts)
     throw InvalidArgument("--parts", "must be in [1, " + std::to_string(kMaxParts) + "], got " +
-                              std::to_string(parts));
+                                         std::to_string(parts));
   const int register_stages = plan.register_stages = args.integer("register-size", 0);
   if (register_stages < 0 || register_stages > kMaxRegisterSize)
     throw InvalidArgument("--register-size", "must be in [0, " + std::to_string(kMaxRegisterSize) +
-                              "] (0: sized for the frame), got " +
-                              std::to_string(register_stages));
+                                                 "] (0: sized for the frame), got " +
+                                                 std::to_string(register_stages));
   const bool dof = plan.dof;
   if (!dof)
     for (const char* key : {"rule", "in-focus", "area-weight-bits", "color-weight-bits"})
       if (args.has(key))
-        throw InvalidArgument("--" + std::string(key), "applies to --program dof only, not laplacian");
+        throw InvalidArgument("--" + std::string(key),
+                              "applies to --program dof only, not laplacian");
   ipf::PerformanceInput& hardware = plan.hardware;
   hardware.mask = mask;
   hardware.parts = parts;

@@ -16,8 +16,10 @@ int main(int argc, char** argv) {
   try {
     return tridiff::cli::run_command_line(argc, argv);
   } catch (const std::bad_alloc&) {
-    std::fputs("tridiff: not enough memory for this frame and method (try a smaller image, "
-               "fewer --threads or another --method)\n", stderr);
+    std::fputs(
+        "tridiff: not enough memory for this frame and method (try a smaller image, "
+        "fewer --threads or another --method)\n",
+        stderr);
   } catch (const std::exception& error) {
     std::fprintf(stderr, "%s\n", error.what());
   }

@@ -23,7 +23,8 @@ namespace {
 
 using namespace tridiff;
 
-constexpr const char* kUsageHead = R"(usage: tridiff dof [options]      depth of field (built-in scene when --color is absent)
+constexpr const char* kUsageHead =
+    R"(usage: tridiff dof [options]      depth of field (built-in scene when --color is absent)
        tridiff ipf [options]      the Inverse Post Filter hardware model (tridiff ipf --help)
        tridiff methods            list the depth-of-field methods
        tridiff --help
@@ -53,7 +54,7 @@ socket, a folder, an input file or the file standard output is redirected to is 
 )";
 
 const std::vector<std::string> kDofFlags = {"layers", "no-skip", "help"};
-const std::vector<std::string> kDofOptions = {"method", "in-focus", "psnr-budget", "output",
+const std::vector<std::string> kDofOptions = {"method",     "in-focus",     "psnr-budget", "output",
                                               "coc-output", "input-output", "report"};
 
 void print_dof_usage() {
@@ -68,7 +69,8 @@ void print_dof_usage() {
 Image coc_picture(ConstPlane coc) {
   float largest = 1e-6f;
   for (std::ptrdiff_t y = 0; y < coc.height(); ++y)
-    for (std::ptrdiff_t x = 0; x < coc.width(); ++x) largest = std::max(largest, std::abs(coc(x, y)));
+    for (std::ptrdiff_t x = 0; x < coc.width(); ++x)
+      largest = std::max(largest, std::abs(coc(x, y)));
   Image picture(coc.width(), coc.height(), 3);
   for (std::ptrdiff_t y = 0; y < coc.height(); ++y)
     for (std::ptrdiff_t x = 0; x < coc.width(); ++x) {
@@ -189,7 +191,8 @@ int run_dof(const cli::Arguments& args) {
   Image separate_result;
   Image& result = in_place ? frame.color : separate_result;
   const auto method_start = std::chrono::steady_clock::now();
-  cli::with_coc_named(args, [&] { report = depth_of_field(result, color, coc.plane(0), method, settings); });
+  cli::with_coc_named(
+      args, [&] { report = depth_of_field(result, color, coc.plane(0), method, settings); });
   const double method_seconds = seconds(method_start);
 
   const auto write_start = std::chrono::steady_clock::now();
@@ -212,7 +215,8 @@ int run_dof(const cli::Arguments& args) {
        << "  skipped  " << 100.0 * report.skipped_fraction << " % of the per-pixel work\n";
   if (report.explicit_steps) text << "  steps    " << report.explicit_steps << " explicit steps\n";
   text << "  time     input " << load_seconds * 1e3 << " ms, coc " << coc_seconds * 1e3 << " ms, ";
-  for (const DofStage& stage : report.stages) text << stage.name << " " << stage.seconds * 1e3 << " ms, ";
+  for (const DofStage& stage : report.stages)
+    text << stage.name << " " << stage.seconds * 1e3 << " ms, ";
   text << "write " << write_seconds * 1e3 << " ms, total " << seconds(start) * 1e3 << " ms\n"
        << "  wrote    " << plan.output << (plan.coc_output.empty() ? "" : ", " + plan.coc_output)
        << "\n";
@@ -223,8 +227,9 @@ int run_dof(const cli::Arguments& args) {
          << ",\n  \"method\": " << json_string(std::string(method.name))
          << ",\n  \"chosen_method\": " << json_string(report.chosen_method)
          << ",\n  \"layered\": " << (report.layered ? "true" : "false")
-         << ",\n  \"coc_model\": " << json_string(frame.coc_model) << ",\n  \"skipped_fraction\": "
-         << report.skipped_fraction << ",\n  \"explicit_steps\": " << report.explicit_steps
+         << ",\n  \"coc_model\": " << json_string(frame.coc_model)
+         << ",\n  \"skipped_fraction\": " << report.skipped_fraction
+         << ",\n  \"explicit_steps\": " << report.explicit_steps
          << ",\n  \"seconds\": {\"input\": " << load_seconds << ", \"coc\": " << coc_seconds;
     for (const DofStage& stage : report.stages)
       json << ", " << json_string(stage.name) << ": " << stage.seconds;

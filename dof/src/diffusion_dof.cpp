@@ -32,7 +32,8 @@ auto timed(DofReport& report, const char* name, Work&& work) {
 void diffuse_uniform(Image& image, float beta, ConstPlane any, int threads) {
   DiffusionOptions options;
   options.threads = threads;
-  diffuse_adi(image, image, any, [beta](float) { return beta; }, options);
+  diffuse_adi(
+      image, image, any, [beta](float) { return beta; }, options);
 }
 
 // Normalised diffusion ("push-pull" by heat) finishes here: `sum` is value * weight and
@@ -66,8 +67,8 @@ void for_each_row(std::ptrdiff_t height, int threads, Row&& row) {
 // The layers are filled, blurred and composited in place in four buffers: a fresh full-frame
 // image costs its page faults (with the ten buffers of the first version, the layers of the
 // built-in scene at 1920 x 1080 on a 2-core VM took 268-584 ms, now typically 56).
-void layered_dof(Image& out, const DofFrame& frame, const DofOptions& settings,
-                 DofReport& report, const Diffuser& diffuse, const DiffusionOptions& options) {
+void layered_dof(Image& out, const DofFrame& frame, const DofOptions& settings, DofReport& report,
+                 const Diffuser& diffuse, const DiffusionOptions& options) {
   const Image& color = frame.color();
   const ConstPlane coc = frame.coc();
   const std::ptrdiff_t width = color.width(), height = color.height();
@@ -177,8 +178,9 @@ void require_finite_conductance(const DofFrame& frame, float in_focus_px) {
       const float k = conductance(coc(x, y));
       if (!std::isfinite(k))
         throw InvalidArgument("coc", "pixel (" + std::to_string(x) + ", " + std::to_string(y) +
-                                  "): " + std::to_string(coc(x, y)) + " maps to conductance " +
-                                  std::to_string(k) + "; it must be finite and >= 0");
+                                         "): " + std::to_string(coc(x, y)) +
+                                         " maps to conductance " + std::to_string(k) +
+                                         "; it must be finite and >= 0");
     }
 }
 
@@ -188,8 +190,8 @@ LinkField coc_links(ConstPlane coc, float in_focus_px, int threads) {
   return links_from_pixels(coc, CocConductance{in_focus_px}, threads);
 }
 
-void diffusion_dof(Image& out, const DofFrame& frame, const DofOptions& settings,
-                   DofReport& report, const Diffuser& diffuse) {
+void diffusion_dof(Image& out, const DofFrame& frame, const DofOptions& settings, DofReport& report,
+                   const Diffuser& diffuse) {
   require_finite_conductance(frame, settings.in_focus_coc_px);
   DiffusionOptions options;
   options.threads = settings.threads;

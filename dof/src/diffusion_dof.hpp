@@ -32,7 +32,7 @@ using Diffuser = std::function<DiffusionReport(Image& dst, const Image& src, Con
 // The links of CocConductance{in_focus_px} as a LinkField (for the explicit methods).
 LinkField coc_links(ConstPlane coc, float in_focus_px, int threads);
 
-void diffusion_dof(Image& out, const DofFrame& frame, const DofOptions& settings,
-                   DofReport& report, const Diffuser& diffuse);
+void diffusion_dof(Image& out, const DofFrame& frame, const DofOptions& settings, DofReport& report,
+                   const Diffuser& diffuse);
 
 }  // namespace tridiff::dof_detail

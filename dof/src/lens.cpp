@@ -49,8 +49,8 @@ void validate(const ThinLens& lens) {
   require_positive(lens.focus_distance_m, "focus");
   if (lens.focus_distance_m * 1000.f <= lens.focal_length_mm)
     throw InvalidArgument("focus", "the focus distance " + std::to_string(lens.focus_distance_m) +
-                              " m must exceed the focal length (" +
-                              std::to_string(lens.focal_length_mm) + " mm)");
+                                       " m must exceed the focal length (" +
+                                       std::to_string(lens.focal_length_mm) + " mm)");
 }
 
 void validate(const ArtistCurve& curve) {
@@ -63,13 +63,14 @@ void validate(const ArtistCurve& curve) {
   // A region with a radius must have a ramp: an empty or reversed one would blur nothing,
   // silently. A radius of 0 is how a region is turned off.
   if (curve.near_radius_px > 0 && !(curve.near_end_m > curve.near_start_m))
-    throw InvalidArgument("near_end", "must be beyond near_start (" + std::to_string(curve.near_start_m) +
-                              " m) when near_radius is > 0, got " +
-                              std::to_string(curve.near_end_m) + " m");
+    throw InvalidArgument("near_end", "must be beyond near_start (" +
+                                          std::to_string(curve.near_start_m) +
+                                          " m) when near_radius is > 0, got " +
+                                          std::to_string(curve.near_end_m) + " m");
   if (curve.far_radius_px > 0 && !(curve.far_end_m > curve.far_start_m))
-    throw InvalidArgument("far_end", "must be beyond far_start (" + std::to_string(curve.far_start_m) +
-                              " m) when far_radius is > 0, got " +
-                              std::to_string(curve.far_end_m) + " m");
+    throw InvalidArgument(
+        "far_end", "must be beyond far_start (" + std::to_string(curve.far_start_m) +
+                       " m) when far_radius is > 0, got " + std::to_string(curve.far_end_m) + " m");
   const bool near = curve.near_radius_px > 0;
   const bool far = curve.far_radius_px > 0;
   if (near && far && curve.far_start_m < curve.near_end_m)

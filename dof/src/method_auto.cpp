@@ -133,9 +133,8 @@ Candidate predict(const DofMethod& method, std::span<const MethodTableRow> table
   if (like.empty()) like = all;
   auto log_radius = [](double r) { return std::log(std::max(r, 0.5) + 1); };
   const double radius = tiles.max_radius();
-  best.error_row = *std::min_element(like.begin(), like.end(), [](auto a, auto b) {
-    return a->psnr < b->psnr;
-  });
+  best.error_row =
+      *std::min_element(like.begin(), like.end(), [](auto a, auto b) { return a->psnr < b->psnr; });
   best.cost_row = *std::min_element(like.begin(), like.end(), [&](auto a, auto b) {
     return std::abs(log_radius(a->max_radius) - log_radius(radius)) <
            std::abs(log_radius(b->max_radius) - log_radius(radius));
@@ -192,9 +191,8 @@ MethodChoice choose_dof_method(const TileMap& tiles, const DofOptions& settings,
   auto chosen = std::find_if(candidates.begin(), candidates.end(), meets);
   const bool met = chosen != candidates.end();
   if (!met)
-    chosen = std::max_element(candidates.begin(), candidates.end(), [](auto& a, auto& b) {
-      return a.expected_psnr < b.expected_psnr;
-    });
+    chosen = std::max_element(candidates.begin(), candidates.end(),
+                              [](auto& a, auto& b) { return a.expected_psnr < b.expected_psnr; });
 
   std::ostringstream reason;
   reason.precision(3);
@@ -209,8 +207,8 @@ MethodChoice choose_dof_method(const TileMap& tiles, const DofOptions& settings,
       reason << (listed == 1 ? " Others: " : "; ") << describe(c)
              << (meets(c) ? "" : " over budget");
   if (!missing.empty()) reason << ". Not in the table: " << missing;
-  return {std::string(chosen->method->name), chosen->predicted_seconds, chosen->expected_psnr,
-          met, reason.str()};
+  return {std::string(chosen->method->name), chosen->predicted_seconds, chosen->expected_psnr, met,
+          reason.str()};
 }
 
 namespace dof_detail {

@@ -116,10 +116,22 @@ double large_sigma(double radius) {
 // The 17 pixels of seed 002 fig. 28-5 (offsets dx, dy): the centre and four 2 x 2 squares
 // turned about it (the four bilinear lookups of GetSmallBlurSample).
 constexpr std::array<std::array<int, 2>, 17> kSmallTaps{{{0, 0},
-                                                         {0, -2}, {1, -2}, {0, -1}, {1, -1},
-                                                         {-2, -1}, {-1, -1}, {-2, 0}, {-1, 0},
-                                                         {-1, 1}, {0, 1}, {-1, 2}, {0, 2},
-                                                         {1, 0}, {2, 0}, {1, 1}, {2, 1}}};
+                                                         {0, -2},
+                                                         {1, -2},
+                                                         {0, -1},
+                                                         {1, -1},
+                                                         {-2, -1},
+                                                         {-1, -1},
+                                                         {-2, 0},
+                                                         {-1, 0},
+                                                         {-1, 1},
+                                                         {0, 1},
+                                                         {-1, 2},
+                                                         {0, 2},
+                                                         {1, 0},
+                                                         {2, 0},
+                                                         {1, 1},
+                                                         {2, 1}}};
 
 // Blend weights of the unblurred pixel and the small, medium and large levels for radius r
 // (0 < r <= top node): linear between neighbouring nodes 0, r_s, r_m, R (seed 002
@@ -178,8 +190,8 @@ void upsample_span(const float* quarter_row, const Taps& tx, std::ptrdiff_t x0, 
                    float* dst) {
   for (std::ptrdiff_t x = x0; x < x1; ++x) {
     const float fx = tx.f[std::size_t(x)];
-    dst[x] = (1.f - fx) * quarter_row[tx.i0[std::size_t(x)]] +
-             fx * quarter_row[tx.i1[std::size_t(x)]];
+    dst[x] =
+        (1.f - fx) * quarter_row[tx.i0[std::size_t(x)]] + fx * quarter_row[tx.i1[std::size_t(x)]];
   }
 }
 
@@ -229,8 +241,8 @@ void small_blur_span(const std::array<const float*, 5>& rows, std::ptrdiff_t wid
 // radius, clamped to max_radius; a pixel is near by focus.is_near. The blocks of the last
 // row and column reach past the frame into its mirror image, so every block holds 16 pixels
 // centred on 4j + 1.5 as the upsampling assumes.
-void downsample(const Image& color, ConstPlane coc, FocusTest focus, float max_radius,
-                Image& mean, Plane near_out, int threads) {
+void downsample(const Image& color, ConstPlane coc, FocusTest focus, float max_radius, Image& mean,
+                Plane near_out, int threads) {
   const std::ptrdiff_t width = color.width(), height = color.height();
   const std::ptrdiff_t qw = mean.width(), qh = mean.height();
   const int channels = color.channels();
@@ -278,8 +290,8 @@ Plan plan_frame(const DofFrame& frame) {
   Plan plan;
   plan.top = std::min(frame.max_radius(), kMaxRadius);
   plan.near = frame.has_near();
-  plan.nodes.radius = {0.f, float(disc_radius(kSmallVariance)),
-                       float(disc_radius(kMediumVariance)), plan.top};
+  plan.nodes.radius = {0.f, float(disc_radius(kSmallVariance)), float(disc_radius(kMediumVariance)),
+                       plan.top};
   plan.nodes.count = plan.top > plan.nodes.radius[2] ? 4 : plan.top > plan.nodes.radius[1] ? 3 : 2;
   plan.sigma_q = large_sigma(plan.top);
   plan.gaussian = gaussian_kernel(plan.sigma_q);
@@ -326,7 +338,8 @@ QuarterGrid quarter_grid(const DofFrame& frame, const Plan& plan, Stages& stages
   if (plan.nodes.count == 4) {
     grid.large.reset(qw, qh, channels);
     for (int c = 0; c < channels; ++c)
-      convolve_separable(grid.large.plane(c), mean.plane(c), gaussian, gaussian, Border::mirror, team);
+      convolve_separable(grid.large.plane(c), mean.plane(c), gaussian, gaussian, Border::mirror,
+                         team);
   }
   stages.end("medium and large levels");
 

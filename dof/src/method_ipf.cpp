@@ -21,8 +21,8 @@ namespace {
 void require_mask(int size) {
   if (size < 3 || size % 2 == 0 || size > kMaxMask)
     throw InvalidArgument("mask", "must be odd and in [3, " + std::to_string(kMaxMask) +
-                              "] (fig. 10's 8-bit Radius reaches 255 pixels), got " +
-                              std::to_string(size));
+                                      "] (fig. 10's 8-bit Radius reaches 255 pixels), got " +
+                                      std::to_string(size));
 }
 
 }  // namespace
@@ -32,11 +32,12 @@ void validate(const DofProgram& program) {
   if (!(program.in_focus_coc_px >= 0.f) || !std::isfinite(program.in_focus_coc_px))
     throw InvalidArgument("in_focus_coc_px", "must be finite and >= 0");
   if (program.area_weight_bits < 1 || program.area_weight_bits > 16)
-    throw InvalidArgument("area_weight_bits", "must be in [1, 16], got " + std::to_string(program.area_weight_bits));
+    throw InvalidArgument("area_weight_bits",
+                          "must be in [1, 16], got " + std::to_string(program.area_weight_bits));
   // At least as wide as one weight; at most 20 so that Color (8 more) stays in 32 bits.
   if (program.color_weight_bits < program.area_weight_bits || program.color_weight_bits > 20)
-    throw InvalidArgument(
-        "color_weight_bits", "must be in [area_weight_bits, 20], got " + std::to_string(program.color_weight_bits));
+    throw InvalidArgument("color_weight_bits", "must be in [area_weight_bits, 20], got " +
+                                                   std::to_string(program.color_weight_bits));
 }
 
 std::int32_t disc_pixels(int radius) {
@@ -90,7 +91,8 @@ void validate(const MaskKernel& kernel) {
   int magnitude = 0;
   for (int w : kernel.weights) magnitude += std::abs(w);
   if (magnitude > 127)
-    throw InvalidArgument("weights", "sum of |weight| is " + std::to_string(magnitude) +
+    throw InvalidArgument("weights",
+                          "sum of |weight| is " + std::to_string(magnitude) +
                               "; the 8-bit ColorWeight and 16-bit Color registers of seed 004 "
                               "fig. 10 hold at most 127");
 }
@@ -170,8 +172,8 @@ IpfDofStats ipf_dof(Image& out, const Image& color, ConstPlane z, ConstPlane coc
                     const ipf::DofProgram& program, int threads, bool skip_in_focus) {
   const ipf::DofQuantizer quantizer(program);
   if (color.channels() > ipf::kMaxLanes)
-    throw InvalidArgument(
-        "color", "has " + std::to_string(color.channels()) + " channels; the IPF pipe carries at most 4");
+    throw InvalidArgument("color", "has " + std::to_string(color.channels()) +
+                                       " channels; the IPF pipe carries at most 4");
   require_size(color, z.width(), z.height(), "color (against z)");
   require_size(color, coc.width(), coc.height(), "color (against coc)");
   const std::ptrdiff_t width = color.width(), height = color.height();

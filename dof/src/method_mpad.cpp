@@ -16,8 +16,7 @@ namespace {
 // (diffuse_explicit); the links come from the CoC, so a CoC that needs more steps than allowed
 // is refused as the CoC's, before any work.
 void require_steppable(const LinkField& beta, const DiffusionOptions& options) {
-  const double steps =
-      std::max(1.0, std::ceil(double(beta.max_link()) / kExplicitStabilityBound));
+  const double steps = std::max(1.0, std::ceil(double(beta.max_link()) / kExplicitStabilityBound));
   if (steps <= options.max_explicit_steps) return;
   std::ostringstream message;
   message << "the largest conductance " << beta.max_link() << " needs " << steps

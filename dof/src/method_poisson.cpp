@@ -86,18 +86,18 @@
 namespace tridiff {
 namespace {
 
-constexpr int kQuads = 12;                 // the pattern's quadruples: 48 taps + the centre
+constexpr int kQuads = 12;  // the pattern's quadruples: 48 taps + the centre
 constexpr int kMaxTaps = 1 + 4 * kQuads;
 constexpr int kMinQuads = 3;
-constexpr float kMaxRadius = 1 << 20;      // px; a larger CoC is clamped (float positions)
-constexpr double kMaxLevelSigma = 256;     // px; the padded blur of one plane stays < 1 GB
+constexpr float kMaxRadius = 1 << 20;         // px; a larger CoC is clamped (float positions)
+constexpr double kMaxLevelSigma = 256;        // px; the padded blur of one plane stays < 1 GB
 constexpr float kBilinearVariance = 1.f / 6;  // mean f (1 - f) of a bilinear read
-constexpr float kSharpMask = 1.f / 1024;       // a sharp pixel's share in the blurred levels
+constexpr float kSharpMask = 1.f / 1024;      // a sharp pixel's share in the blurred levels
 
 // The tap pattern in the unit disc, and the per-axis second moment of each prefix.
 struct TapPattern {
   std::array<float, kMaxTaps> x{}, y{}, radius{};
-  std::array<float, kQuads + 1> m2{};         // m2[q]: of the first 1 + 4q taps
+  std::array<float, kQuads + 1> m2{};           // m2[q]: of the first 1 + 4q taps
   std::array<float, kQuads + 1> alias_ratio{};  // a / (m2 + a), a = pi / (4 (1 + 4q))
 };
 
@@ -128,8 +128,8 @@ TapPattern make_pattern() {
         best_y = cy;
       }
     }
-    const double quad[4][2] = {{best_x, best_y}, {-best_x, -best_y}, {-best_y, best_x},
-                               {best_y, -best_x}};
+    const double quad[4][2] = {
+        {best_x, best_y}, {-best_x, -best_y}, {-best_y, best_x}, {best_y, -best_x}};
     for (const auto& p : quad) {
       pattern.x[count] = float(p[0]);
       pattern.y[count] = float(p[1]);
@@ -140,8 +140,8 @@ TapPattern make_pattern() {
   for (int q = 0; q <= kQuads; ++q) {
     const int n = 1 + 4 * q;
     double sum = 0;
-    for (int i = 0; i < n; ++i) sum += 0.5 * (double(pattern.x[i]) * pattern.x[i] +
-                                              double(pattern.y[i]) * pattern.y[i]);
+    for (int i = 0; i < n; ++i)
+      sum += 0.5 * (double(pattern.x[i]) * pattern.x[i] + double(pattern.y[i]) * pattern.y[i]);
     pattern.m2[q] = float(sum / n);
     const double a = std::numbers::pi / (4.0 * n);
     pattern.alias_ratio[q] = float(a / (sum / n + a));
@@ -229,8 +229,7 @@ struct Level {
   float variance = 0;  // per axis, of the blur and the bilinear read together
 };
 
-Level build_level(const Image& color, ConstPlane coc, FocusTest focus, double sigma,
-                  int threads) {
+Level build_level(const Image& color, ConstPlane coc, FocusTest focus, double sigma, int threads) {
   const std::ptrdiff_t width = color.width(), height = color.height();
   Level level;
   std::vector<BoxPass> passes;
@@ -252,9 +251,7 @@ Level build_level(const Image& color, ConstPlane coc, FocusTest focus, double si
                        rows = (2 * height - 1) / (2 * spacing) + 3;
   level.samples.reset(cols, rows, color.channels());
   auto mask_of = [&](std::ptrdiff_t x, std::ptrdiff_t y) {
-    return !focus.is_sharp(coc(fold_index(x, width), fold_index(y, height)))
-               ? 1.f
-               : kSharpMask;
+    return !focus.is_sharp(coc(fold_index(x, width), fold_index(y, height))) ? 1.f : kSharpMask;
   };
   if (passes.empty()) {
     // The input premultiplied by the mask, and the mask: a bilinear read divided by the
@@ -330,8 +327,8 @@ PixelPlan plan_pixel(float radius, const std::vector<Level>& levels) {
   const float target = scatter_disc_variance()(radius);
   const float m2 = pattern.m2[q], alias = std::numbers::pi_v<float> / (4.f * float(plan.taps));
   // m2 R'² + max(1/6, alias R'²) = target: the smaller root of the two linear pieces.
-  const float scale2 = std::max(
-      0.f, std::min((target - kBilinearVariance) / m2, target / (m2 + alias)));
+  const float scale2 =
+      std::max(0.f, std::min((target - kBilinearVariance) / m2, target / (m2 + alias)));
   plan.scale = std::sqrt(scale2);
   const float wanted = std::max(kBilinearVariance, alias * scale2);
   const int top = int(levels.size()) - 1;
@@ -447,7 +444,8 @@ std::vector<Level> build_levels(const DofFrame& frame) {
   const float ratio =
       *std::max_element(pattern.alias_ratio.begin() + kMinQuads, pattern.alias_ratio.end());
   const float needed = std::max(kBilinearVariance, scatter_disc_variance()(max_radius) * ratio);
-  const double cap = std::min(kMaxLevelSigma, 2.0 * double(std::max(color.width(), color.height())));
+  const double cap =
+      std::min(kMaxLevelSigma, 2.0 * double(std::max(color.width(), color.height())));
   levels.push_back(build_level(color, coc, focus, 0, team));
   for (double sigma = 1; levels.back().variance < needed && sigma <= cap; sigma *= 2)
     levels.push_back(build_level(color, coc, focus, sigma, team));
@@ -467,8 +465,7 @@ std::string describe_levels(const std::vector<Level>& levels) {
 
 namespace dof_detail {
 
-void run_poisson(Image& out, const DofFrame& frame, const DofOptions& settings,
-                 DofReport& report) {
+void run_poisson(Image& out, const DofFrame& frame, const DofOptions& settings, DofReport& report) {
   const Image& color = frame.color();
   Stages stages(report);
   const TiledGather gather(frame.tiles(), settings.skip_in_focus, frame.threads());
@@ -479,20 +476,19 @@ void run_poisson(Image& out, const DofFrame& frame, const DofOptions& settings,
   stages.end("levels");
 
   // A pixel's gather radius is its own: a tile without a disc of its own is a copy.
-  const std::ptrdiff_t copied =
-      gather.for_each_tile([&](const Rect& area, const TileInfo& tile) -> std::ptrdiff_t {
-        if (levels.empty() || (gather.skip() && tile.max_radius == 0)) {
-          for (int ch = 0; ch < color.channels(); ++ch)
-            for (std::ptrdiff_t y = area.y; y < area.y + area.height; ++y)
-              std::copy_n(color.plane(ch).row(y) + area.x, area.width,
-                          out.plane(ch).row(y) + area.x);
-          return gather.skip() ? area.area() : 0;
-        }
+  const std::ptrdiff_t copied = gather.for_each_tile([&](const Rect& area,
+                                                         const TileInfo& tile) -> std::ptrdiff_t {
+    if (levels.empty() || (gather.skip() && tile.max_radius == 0)) {
+      for (int ch = 0; ch < color.channels(); ++ch)
         for (std::ptrdiff_t y = area.y; y < area.y + area.height; ++y)
-          for (std::ptrdiff_t x = area.x; x < area.x + area.width; ++x)
-            gather_pixel(out, color, frame.coc(), x, y, frame.focus(), levels);
-        return 0;
-      });
+          std::copy_n(color.plane(ch).row(y) + area.x, area.width, out.plane(ch).row(y) + area.x);
+      return gather.skip() ? area.area() : 0;
+    }
+    for (std::ptrdiff_t y = area.y; y < area.y + area.height; ++y)
+      for (std::ptrdiff_t x = area.x; x < area.x + area.width; ++x)
+        gather_pixel(out, color, frame.coc(), x, y, frame.focus(), levels);
+    return 0;
+  });
   gather.copy_the_rest(out, color);
   stages.end("gather");
 

@@ -125,9 +125,9 @@ struct Split {
 Split split(double a, const std::vector<double>& d) {
   const int n = static_cast<int>(d.size()) - 1;
   if (a >= d[std::size_t(n)]) return {static_cast<std::int16_t>(n), 0.f};
-  int k = std::clamp(static_cast<int>(std::floor(n + std::log(a / d[std::size_t(n)]) /
-                                                         std::log(kLayerRatio))),
-                     0, n - 1);
+  int k = std::clamp(
+      static_cast<int>(std::floor(n + std::log(a / d[std::size_t(n)]) / std::log(kLayerRatio))), 0,
+      n - 1);
   while (k > 0 && a < d[std::size_t(k)]) --k;
   while (k + 1 < n && a >= d[std::size_t(k + 1)]) ++k;
   const double lo = d[std::size_t(k)] * d[std::size_t(k)];

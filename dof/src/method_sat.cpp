@@ -101,8 +101,7 @@ struct AxisTaps {
   std::ptrdiff_t first_cell, last_cell;  // the cells [lo, hi] touches, clamped to the line
 };
 
-void prefix_taps(double at, std::ptrdiff_t n, double sign, std::ptrdiff_t* index,
-                 double* weight) {
+void prefix_taps(double at, std::ptrdiff_t n, double sign, std::ptrdiff_t* index, double* weight) {
   if (at <= 0) {
     index[0] = 0, weight[0] = sign * at;
     index[1] = -1, weight[1] = 0;
@@ -207,8 +206,8 @@ Image half_resolution(std::ptrdiff_t width, std::ptrdiff_t height, int planes, i
     for (std::ptrdiff_t i = 0; i < half.width(); ++i) {
       const std::ptrdiff_t x0 = 2 * i, x1 = std::min(2 * i + 1, width - 1);
       for (int k = 0; k < planes; ++k)
-        half(i, j, k) = 0.25f * ((value(k, x0, y0) + value(k, x1, y0)) +
-                                 (value(k, x0, y1) + value(k, x1, y1)));
+        half(i, j, k) =
+            0.25f * ((value(k, x0, y0) + value(k, x1, y0)) + (value(k, x0, y1) + value(k, x1, y1)));
     }
   }
   return half;
@@ -268,8 +267,8 @@ LayerTables layer_tables(const DofFrame& frame, bool has_far, bool has_near) {
 
 // sat-layers at pixel (x, y) of `tile`: the base (the pixel, or the far layer), the near layer
 // over it, renormalised by the union of their coverages.
-void composite_pixel(Image& out, const DofFrame& frame, const LayerTables& tables,
-                     std::ptrdiff_t x, std::ptrdiff_t y, const TileInfo& tile) {
+void composite_pixel(Image& out, const DofFrame& frame, const LayerTables& tables, std::ptrdiff_t x,
+                     std::ptrdiff_t y, const TileInfo& tile) {
   const Image& color = frame.color();
   const int channels = color.channels();
   const FocusTest focus = frame.focus();
@@ -304,8 +303,7 @@ void composite_pixel(Image& out, const DofFrame& frame, const LayerTables& table
       layer_radius(near, alpha, x, y, tile.near_reach_radius, 0.5 * double(sharp_below),
                    front_radius)) {
     front = ThreeBoxes(x, y, front_radius, cells_x, cells_y);
-    if (front.any_coverage(near[alpha]))
-      front_cover = std::min(front.mean(near[alpha]), 1.0);
+    if (front.any_coverage(near[alpha])) front_cover = std::min(front.mean(near[alpha]), 1.0);
   }
   const bool has_front = front_cover > kMinCoverage;
   // Near over the base with the coverages as alphas, renormalised by their union (what
@@ -317,8 +315,7 @@ void composite_pixel(Image& out, const DofFrame& frame, const LayerTables& table
     double v = sharp ? double(color(x, y, ch)) : 0.0;
     if (!sharp && has_base) v = back.mean(far[k]) / back_cover;
     if (has_front)
-      v = (front.mean(near[k]) + (1 - front_cover) * (has_base ? base_alpha * v : 0.0)) /
-          total;
+      v = (front.mean(near[k]) + (1 - front_cover) * (has_base ? base_alpha * v : 0.0)) / total;
     // Neither layer in reach happens only through rounding: keep the input.
     out(x, y, ch) = has_base || has_front ? static_cast<float>(v) : color(x, y, ch);
   }
@@ -381,8 +378,8 @@ void run_sat_layers(Image& out, const DofFrame& frame, const DofOptions& setting
   gather.copy_the_rest(out, color);
   stages.end("gather and composite");
   report.layered = has_near;
-  report.notes = size_note(color) + (has_near ? ", near layer over far layer"
-                                              : ", no near pixel: far layer only");
+  report.notes = size_note(color) +
+                 (has_near ? ", near layer over far layer" : ", no near pixel: far layer only");
   if (settings.progress) settings.progress(1.0);
 }
 

@@ -158,9 +158,9 @@ void refuse_what_takes_too_long(const DofFrame& frame) {
     for (std::ptrdiff_t x = 0; x < coc.width(); ++x)
       if (std::fabs(coc(x, y)) > kMaxDiameter)
         throw InvalidArgument("coc", "pixel (" + std::to_string(x) + ", " + std::to_string(y) +
-                                  ") has |CoC| " + std::to_string(std::fabs(coc(x, y))) +
-                                  " px; the scatter reference takes at most " +
-                                  std::to_string(int(kMaxDiameter)) + " px");
+                                         ") has |CoC| " + std::to_string(std::fabs(coc(x, y))) +
+                                         " px; the scatter reference takes at most " +
+                                         std::to_string(int(kMaxDiameter)) + " px");
 }
 
 // 1. Every pixel's disc (its normaliser: a sum over the whole disc, computed once).
@@ -248,8 +248,7 @@ DepthLayers sort_into_layers(const DofFrame& frame, const WorkedTiles& tiles) {
   sources.reserve(std::size_t(width * height - tiles.skipped));
   for (std::ptrdiff_t y = 0; y < height; ++y)
     for (std::ptrdiff_t x = 0; x < width; ++x)
-      if (tiles.at(x, y))
-        sources.emplace_back(layer_key(coc(x, y)), std::int32_t(y * width + x));
+      if (tiles.at(x, y)) sources.emplace_back(layer_key(coc(x, y)), std::int32_t(y * width + x));
   std::sort(sources.begin(), sources.end());
   for (std::size_t i = 0; i < sources.size(); ++i)
     if (i == 0 || sources[i].first != sources[i - 1].first) layers.start.push_back(i);
@@ -352,7 +351,8 @@ void composite_box(const Box& box, LayerSums& sums, Image& out, Plane trans) {
         trans_row[x] = a >= 1 ? 0.f : static_cast<float>(t * (1.0 - a));
       }
       cover_row[x] = 0;
-      for (int c = 0; c < channels; ++c) colour_row[std::size_t(x) + plane_size * std::size_t(c)] = 0;
+      for (int c = 0; c < channels; ++c)
+        colour_row[std::size_t(x) + plane_size * std::size_t(c)] = 0;
     }
   }
 }
@@ -378,8 +378,7 @@ void finish_band(const DofFrame& frame, const WorkedTiles& tiles, ConstPlane tra
 
 namespace dof_detail {
 
-void run_scatter(Image& out, const DofFrame& frame, const DofOptions& settings,
-                 DofReport& report) {
+void run_scatter(Image& out, const DofFrame& frame, const DofOptions& settings, DofReport& report) {
   refuse_what_takes_too_long(frame);
   const std::ptrdiff_t width = frame.width(), height = frame.height();
   const int channels = frame.channels();

@@ -17,20 +17,19 @@ namespace {
 void require_same_shape(const Image& image, const Image& reference, const char* name) {
   if (image.width() != reference.width() || image.height() != reference.height() ||
       image.channels() != reference.channels())
-    throw InvalidArgument(name, "is " + std::to_string(image.width()) + " x " +
-                              std::to_string(image.height()) + " x " +
-                              std::to_string(image.channels()) + ", the reference is " +
-                              std::to_string(reference.width()) + " x " +
-                              std::to_string(reference.height()) + " x " +
-                              std::to_string(reference.channels()));
+    throw InvalidArgument(
+        name, "is " + std::to_string(image.width()) + " x " + std::to_string(image.height()) +
+                  " x " + std::to_string(image.channels()) + ", the reference is " +
+                  std::to_string(reference.width()) + " x " + std::to_string(reference.height()) +
+                  " x " + std::to_string(reference.channels()));
 }
 
 void require_coc_size(const Image& reference, ConstPlane coc) {
   if (coc.width() != reference.width() || coc.height() != reference.height())
     throw InvalidArgument("coc", "is " + std::to_string(coc.width()) + " x " +
-                              std::to_string(coc.height()) + ", the images are " +
-                              std::to_string(reference.width()) + " x " +
-                              std::to_string(reference.height()));
+                                     std::to_string(coc.height()) + ", the images are " +
+                                     std::to_string(reference.width()) + " x " +
+                                     std::to_string(reference.height()));
 }
 
 // Stands for "no sharp pixel on this line": larger than any squared distance in a frame, small
@@ -166,8 +165,8 @@ DofError dof_error(const Image& out, const Image& reference, const Image& input,
   }
   const double samples = double(width * height * channels);
   error.rmse = std::sqrt(sum_sq / samples);
-  error.psnr = clipped_mse > 0 ? -10 * std::log10(clipped_mse)
-                               : std::numeric_limits<double>::infinity();
+  error.psnr =
+      clipped_mse > 0 ? -10 * std::log10(clipped_mse) : std::numeric_limits<double>::infinity();
   if (error.in_focus_pixels > 0)
     error.in_focus_rmse = std::sqrt(in_focus_sq / double(error.in_focus_pixels * channels));
   if (error.leakage_pixels > 0)

@@ -150,15 +150,16 @@ const DofMethod& find_dof_method(std::string_view name) {
     if (method.name == name) return method;
     known += (known.empty() ? "" : ", ") + std::string(method.name);
   }
-  throw InvalidArgument("method", "unknown method '" + std::string(name) + "' (known: " + known + ")");
+  throw InvalidArgument("method",
+                        "unknown method '" + std::string(name) + "' (known: " + known + ")");
 }
 
 namespace {
 
 [[noreturn]] void bad_pixel(const char* what, std::ptrdiff_t x, std::ptrdiff_t y, int c) {
   throw InvalidArgument(what, "pixel (" + std::to_string(x) + ", " + std::to_string(y) + ")" +
-                            (c >= 0 ? ", channel " + std::to_string(c) : std::string()) +
-                            " is not finite");
+                                  (c >= 0 ? ", channel " + std::to_string(c) : std::string()) +
+                                  " is not finite");
 }
 
 // A fast pass (probe = sum of 0 * v is zero unless some v is NaN or infinite), then, only if
@@ -192,7 +193,8 @@ float max_abs(ConstPlane plane, int threads) {
 #pragma omp parallel for num_threads(threads) schedule(static) reduction(max : largest)
   for (std::ptrdiff_t y = 0; y < plane.height(); ++y) {
     const float* row = plane.row(y);
-    for (std::ptrdiff_t x = 0; x < plane.width(); ++x) largest = std::max(largest, std::abs(row[x]));
+    for (std::ptrdiff_t x = 0; x < plane.width(); ++x)
+      largest = std::max(largest, std::abs(row[x]));
   }
   return largest;
 }
@@ -200,18 +202,13 @@ float max_abs(ConstPlane plane, int threads) {
 }  // namespace
 
 DofFrame::DofFrame(const Image& color, ConstPlane coc, const DofOptions& settings)
-    : color_(&color),
-      coc_(coc),
-      threads_(1),
-      focus_{sharp_below_px(settings.in_focus_coc_px)} {
+    : color_(&color), coc_(coc), threads_(1), focus_{sharp_below_px(settings.in_focus_coc_px)} {
   threads_ = resolve_threads(settings.threads);
   validate_dof_input(color, coc, threads_);
   max_abs_coc_ = max_abs(coc, threads_);
 }
 
-DofFrame::DofFrame(const DofFrame& frame, const Image& color) : DofFrame(frame) {
-  color_ = &color;
-}
+DofFrame::DofFrame(const DofFrame& frame, const Image& color) : DofFrame(frame) { color_ = &color; }
 
 const TileMap& DofFrame::tiles() const {
   if (!tiles_)
@@ -224,8 +221,7 @@ namespace dof_detail {
 
 void run_on_frame(const DofMethod& method, Image& out, const DofFrame& frame,
                   const DofOptions& settings, DofReport& report) {
-  if (method.in_place || &out != &frame.color())
-    return method.kernel(out, frame, settings, report);
+  if (method.in_place || &out != &frame.color()) return method.kernel(out, frame, settings, report);
   const Image input = frame.color();
   method.kernel(out, DofFrame(frame, input), settings, report);
 }
@@ -245,9 +241,9 @@ void validate_coc(const Image& color, ConstPlane coc, int threads) {
 void validate_coc_size(const Image& color, ConstPlane coc) {
   if (coc.width() != color.width() || coc.height() != color.height())
     throw InvalidArgument("coc", "is " + std::to_string(coc.width()) + " x " +
-                              std::to_string(coc.height()) + ", the colour image is " +
-                              std::to_string(color.width()) + " x " +
-                              std::to_string(color.height()));
+                                     std::to_string(coc.height()) + ", the colour image is " +
+                                     std::to_string(color.width()) + " x " +
+                                     std::to_string(color.height()));
 }
 
 }  // namespace tridiff

@@ -47,8 +47,8 @@ float value_noise(double u, double v, std::uint32_t seed) {
 Rgb textured(double u, double v, Rgb tint, std::uint32_t seed) {
   const auto check_x = std::int64_t(std::floor(u * 24)), check_y = std::int64_t(std::floor(v * 24));
   const bool check = ((check_x + check_y) & 1) != 0;
-  const float noise = 0.6f * value_noise(u * 48, v * 48, seed) +
-                      0.4f * value_noise(u * 12, v * 12, seed + 1);
+  const float noise =
+      0.6f * value_noise(u * 48, v * 48, seed) + 0.4f * value_noise(u * 12, v * 12, seed + 1);
   const float grey = 0.2f + 0.5f * noise + (check ? 0.25f : 0.f);
   return {tint[0] * grey, tint[1] * grey, tint[2] * grey};
 }
@@ -150,7 +150,7 @@ constexpr std::array kScenes{
 void require_size(std::ptrdiff_t width, std::ptrdiff_t height) {
   if (width < 1 || height < 1)
     throw InvalidArgument("size", std::to_string(width) + " x " + std::to_string(height) +
-                              " (a scene needs at least 1 x 1)");
+                                      " (a scene needs at least 1 x 1)");
 }
 
 }  // namespace

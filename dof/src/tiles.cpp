@@ -44,12 +44,10 @@ TileInfo classify(ConstPlane coc, const Rect& area, FocusTest focus) {
 TileMap::TileMap(ConstPlane coc, float in_focus_coc_px, std::ptrdiff_t tile,
                  std::ptrdiff_t margin_px, int threads)
     : width_(coc.width()), height_(coc.height()), tile_(tile), in_focus_(in_focus_coc_px) {
-  if (tile < 1)
-    throw InvalidArgument("tile", "must be at least 1, got " + std::to_string(tile));
+  if (tile < 1) throw InvalidArgument("tile", "must be at least 1, got " + std::to_string(tile));
   if (margin_px < 0)
     throw InvalidArgument("margin_px", "must be >= 0, got " + std::to_string(margin_px));
-  if (!(in_focus_coc_px >= 0))
-    throw InvalidArgument("in_focus_coc_px", "must be >= 0");
+  if (!(in_focus_coc_px >= 0)) throw InvalidArgument("in_focus_coc_px", "must be >= 0");
   tiles_x_ = (width_ + tile - 1) / tile;
   tiles_y_ = (height_ + tile - 1) / tile;
   info_.resize(std::size_t(tiles_x_ * tiles_y_));

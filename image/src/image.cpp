@@ -35,8 +35,8 @@ FloatStorage allocate_zeroed_floats(std::ptrdiff_t count) {
   // kernel can back every part of the array with them.
   // Huge pages also need a 2 MiB aligned address: map one huge page more, trim both ends.
   const std::size_t length = (bytes + kHugePage - 1) / kHugePage * kHugePage;
-  void* mapped = mmap(nullptr, length + kHugePage, PROT_READ | PROT_WRITE,
-                      MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+  void* mapped =
+      mmap(nullptr, length + kHugePage, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
   if (mapped == MAP_FAILED) throw std::bad_alloc();
   const auto start = reinterpret_cast<std::uintptr_t>(mapped);
   const std::uintptr_t aligned = (start + kHugePage - 1) / kHugePage * kHugePage;

@@ -139,8 +139,9 @@ void check_exr_header(const std::string& path) {
   for (int header = 0;; ++header) {
     for (int attribute = 0;; ++attribute) {
       if (!read_name(in, name, longest)) {
-        if (in) fail(path, "is damaged: a header name is longer than " + std::to_string(longest) +
-                               " characters");
+        if (in)
+          fail(path, "is damaged: a header name is longer than " + std::to_string(longest) +
+                         " characters");
         return;
       }
       if (name.empty()) {
@@ -151,10 +152,9 @@ void check_exr_header(const std::string& path) {
       unsigned char length_bytes[4];
       if (!read_name(in, type, longest) || !in.read(reinterpret_cast<char*>(length_bytes), 4))
         return;
-      const std::int64_t length = std::int32_t(std::uint32_t(length_bytes[0]) |
-                                               std::uint32_t(length_bytes[1]) << 8 |
-                                               std::uint32_t(length_bytes[2]) << 16 |
-                                               std::uint32_t(length_bytes[3]) << 24);
+      const std::int64_t length =
+          std::int32_t(std::uint32_t(length_bytes[0]) | std::uint32_t(length_bytes[1]) << 8 |
+                       std::uint32_t(length_bytes[2]) << 16 | std::uint32_t(length_bytes[3]) << 24);
       const std::int64_t left = size - std::int64_t(in.tellg());
       if (length < 0 || length > left)
         fail(path, "is damaged: its header's attribute " + quote(name) + " declares " +
@@ -180,8 +180,7 @@ std::unique_ptr<OIIO::ImageInput> open_input(const std::string& path, std::int64
   auto input = OIIO::ImageInput::open(path, &config);
   if (!input) {
     const std::string why = oiio_error();
-    if (!known_read_extension(path))
-      fail(path, "unknown image format (" + why + ")");
+    if (!known_read_extension(path)) fail(path, "unknown image format (" + why + ")");
     fail(path, "cannot read (" + why + ")");
   }
   const OIIO::ImageSpec& spec = input->spec();
@@ -214,8 +213,8 @@ std::vector<float> read_interleaved(OIIO::ImageInput& input, const std::string& 
   // Some readers (TIFF) report missing strips only here and return success with the pixels
   // they could not read left black.
   if (const std::string damage = input.geterror(); !damage.empty())
-    fail(path, "cannot read the pixels (the file is damaged or truncated: " +
-                   first_line(damage) + ")");
+    fail(path,
+         "cannot read the pixels (the file is damaged or truncated: " + first_line(damage) + ")");
   return pixels;
 }
 
@@ -227,8 +226,8 @@ std::string pixel_of_channel(std::ptrdiff_t x, std::ptrdiff_t y, const std::stri
 
 [[noreturn]] void fail_not_finite(const std::string& path, const std::string& channel,
                                   std::ptrdiff_t x, std::ptrdiff_t y, float value) {
-  fail(path, pixel_of_channel(x, y, channel) + " is " +
-                 (std::isnan(value) ? "NaN" : "infinite") + "; colour must be finite");
+  fail(path, pixel_of_channel(x, y, channel) + " is " + (std::isnan(value) ? "NaN" : "infinite") +
+                 "; colour must be finite");
 }
 
 // Where the first NaN or infinity of `plane` is, by rows, if it has one.
@@ -340,9 +339,10 @@ int grey_channel(const std::string& path, const OIIO::ImageSpec& spec,
   for (std::size_t pixel = 0; pixel < pixels.size(); pixel += static_cast<std::size_t>(n))
     for (const int c : colour)
       if (!same_value(pixels[pixel + c], pixels[pixel + colour[0]]))
-        fail(path, "cannot tell which channel holds depth: none is named Z or depth, and the "
-                   "channels are not one grey image " + channel_list(spec) +
-                   "; choose one with --depth-channel NAME");
+        fail(path,
+             "cannot tell which channel holds depth: none is named Z or depth, and the "
+             "channels are not one grey image " +
+                 channel_list(spec) + "; choose one with --depth-channel NAME");
   return colour[0];
 }
 
@@ -382,21 +382,20 @@ void check_depth_options(const DepthOptions& options) {
   if (options.convention != DepthConvention::Normalized) return;
   const float near = options.near_plane, far = options.far_plane;
   if (!(std::isfinite(near) && near >= 0.f))
-    throw InvalidArgument("near_plane", "must be finite and >= 0 for normalized depth, got " +
-                              format_value(near));
+    throw InvalidArgument(
+        "near_plane", "must be finite and >= 0 for normalized depth, got " + format_value(near));
   if (!(std::isfinite(far) && far > near))
-    throw InvalidArgument("far_plane", "must be finite and greater than near_plane (" + format_value(near) +
-                              ") for normalized depth, got " + format_value(far));
+    throw InvalidArgument("far_plane", "must be finite and greater than near_plane (" +
+                                           format_value(near) + ") for normalized depth, got " +
+                                           format_value(far));
 }
 
 float to_distance(float value, const DepthOptions& options) {
   switch (options.convention) {
     case DepthConvention::Normalized:
       return options.near_plane + value * (options.far_plane - options.near_plane);
-    case DepthConvention::Inverse:
-      return 1.f / value;
-    case DepthConvention::Linear:
-      break;
+    case DepthConvention::Inverse: return 1.f / value;
+    case DepthConvention::Linear: break;
   }
   return value;
 }
@@ -512,14 +511,14 @@ void check_output(const std::string& path, const std::string& extension, const I
 OIIO::ImageSpec output_spec(const Image& image, const OutputFormat& format,
                             const std::string& extension) {
   const int channels = image.channels();
-  OIIO::ImageSpec spec(static_cast<int>(image.width()), static_cast<int>(image.height()),
-                       channels, format.type);
+  OIIO::ImageSpec spec(static_cast<int>(image.width()), static_cast<int>(image.height()), channels,
+                       format.type);
   // read_color's conventions in reverse: one channel is grey, two are grey and alpha, the
   // fourth is alpha. (A fresh vector: assigning a literal to channelnames[i] trips GCC 12's
   // false -Wrestrict warning.)
   if (channels <= 2)
-    spec.channelnames = channels == 1 ? std::vector<std::string>{"Y"}
-                                      : std::vector<std::string>{"Y", "A"};
+    spec.channelnames =
+        channels == 1 ? std::vector<std::string>{"Y"} : std::vector<std::string>{"Y", "A"};
   spec.alpha_channel = channels == 2 ? 1 : channels >= 4 ? 3 : -1;
   // OpenImageIO 2.4's TIFF writer, encoding into memory, emits a directory without its
   // image size when told "sRGB" (it adds an EXIF block); integer TIFF means sRGB to readers
@@ -623,9 +622,9 @@ ColorImage read_color_image(const std::string& path, const ReadOptions& options)
   for (int c = 0; c < 3; ++c) copy(chosen.rgb[c], c);
   if (chosen.alpha >= 0) copy(chosen.alpha, 3);
 
-  const ColorEncoding held =
-      options.encoding == ColorEncoding::Auto ? detect_encoding(spec, chosen.rgb[0])
-                                              : options.encoding;
+  const ColorEncoding held = options.encoding == ColorEncoding::Auto
+                                 ? detect_encoding(spec, chosen.rgb[0])
+                                 : options.encoding;
   if (held == ColorEncoding::Srgb) {
     srgb_to_linear(image, options.threads);
     // Float data forced through the sRGB curve overflows it above about 1e16.
@@ -680,9 +679,11 @@ std::vector<unsigned char> encode_image(const std::string& path, const Image& im
   const OutputFormat format = choose_output_format(extension, image, options.encoding);
   const OIIO::ImageSpec spec = output_spec(image, format, extension);
   if (format.type == OIIO::TypeDesc::UINT8)
-    return encode(path, spec, format.type, quantise<std::uint8_t>(image, format.srgb, options.threads).data());
+    return encode(path, spec, format.type,
+                  quantise<std::uint8_t>(image, format.srgb, options.threads).data());
   if (format.type == OIIO::TypeDesc::UINT16)
-    return encode(path, spec, format.type, quantise<std::uint16_t>(image, format.srgb, options.threads).data());
+    return encode(path, spec, format.type,
+                  quantise<std::uint16_t>(image, format.srgb, options.threads).data());
   // Float formats take linear values as they are; the writer rounds to half when asked.
   const auto pixels =
       interleave<float>(image, options.threads, [](float value, bool) { return value; });

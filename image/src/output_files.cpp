@@ -212,8 +212,8 @@ void OutputFiles::claim(const std::string& label, const std::string& path) {
   if (!fs::is_directory(folder, error))
     fail(output, "the folder '" + folder.string() + "' does not exist");
   if (::access(folder.c_str(), W_OK | X_OK) != 0)
-    fail(output, "cannot write in the folder '" + folder.string() + "' (" +
-                     describe_errno(errno) + ")");
+    fail(output,
+         "cannot write in the folder '" + folder.string() + "' (" + describe_errno(errno) + ")");
   output.target = target.string();
   for (const Output& other : outputs_)
     if (other.target == output.target || (other.exists && output.exists && other.id == output.id))
@@ -286,7 +286,8 @@ void OutputFiles::commit() {
     if (::lstat(output.target.c_str(), &status) == 0) {
       if (!S_ISREG(status.st_mode)) {
         // Something else took the name since claim(): never move it aside or replace it.
-        error = S_ISDIR(status.st_mode) ? "it is a folder now" : "it is a " + kind_of(status.st_mode) + " now";
+        error = S_ISDIR(status.st_mode) ? "it is a folder now"
+                                        : "it is a " + kind_of(status.st_mode) + " now";
       } else {
         step.backup = scratch_name(fs::path(output.target).parent_path(), ".old");
         if (::link(output.target.c_str(), step.backup.c_str()) != 0) {
@@ -317,7 +318,8 @@ void OutputFiles::remove_temporaries_on_signal() {
   struct sigaction action {};
   action.sa_handler = on_signal;
   sigemptyset(&action.sa_mask);
-  for (const int signal_number : {SIGINT, SIGTERM, SIGHUP}) ::sigaction(signal_number, &action, nullptr);
+  for (const int signal_number : {SIGINT, SIGTERM, SIGHUP})
+    ::sigaction(signal_number, &action, nullptr);
 }
 
 }  // namespace tridiff

@@ -69,7 +69,7 @@ PartCounts run_part(const FramePlan& plan, const Part& part, const Program& prog
   const std::ptrdiff_t line = plan.line_length(part);
   const ScanMap map{plan.columns};
   std::vector<ShiftRegister> rows(std::size_t(n), ShiftRegister{n});  // k = 0: newest line (bottom)
-  std::vector<ShiftRegister> pipes;                           // between row k and row k + 1
+  std::vector<ShiftRegister> pipes;                                   // between row k and row k + 1
   for (int k = 0; k + 1 < n; ++k) pipes.emplace_back(line - n);
 
   PartCounts counts;
@@ -217,8 +217,8 @@ class MaskUnits {
 void require_lanes(const Image& color) {
   if (color.empty()) throw InvalidArgument("color", "is empty");
   if (color.channels() > kMaxLanes)
-    throw InvalidArgument(
-        "color", "has " + std::to_string(color.channels()) + " channels; the IPF pipe carries at most 4");
+    throw InvalidArgument("color", "has " + std::to_string(color.channels()) +
+                                       " channels; the IPF pipe carries at most 4");
 }
 
 }  // namespace

@@ -18,7 +18,8 @@ PipeLayout::PipeLayout(std::ptrdiff_t size) : size_(size) {
 
 std::vector<bool> PipeLayout::connect(std::ptrdiff_t length) const {
   if (length < 0 || length > size_)
-    throw InvalidArgument("length", std::to_string(length) + " is not in [0, " + std::to_string(size_) + "]");
+    throw InvalidArgument("length",
+                          std::to_string(length) + " is not in [0, " + std::to_string(size_) + "]");
   std::vector<bool> on(stages_.size(), false);
   const std::size_t last = stages_.size() - 1;
   // The power-of-two stages alone reach 2^m - 1 = the last stage's start; beyond it, the last
@@ -65,9 +66,8 @@ FramePlan plan_frame(std::ptrdiff_t width, std::ptrdiff_t height, int mask, int 
                      std::ptrdiff_t size) {
   if (mask < 3 || mask % 2 == 0 || mask > kMaxMask)
     throw InvalidArgument("mask", "must be odd and in [3, " + std::to_string(kMaxMask) + "], got " +
-                              std::to_string(mask));
-  if (parts < 1)
-    throw InvalidArgument("parts", "must be >= 1, got " + std::to_string(parts));
+                                      std::to_string(mask));
+  if (parts < 1) throw InvalidArgument("parts", "must be >= 1, got " + std::to_string(parts));
   if (width < 1 || height < 1) throw InvalidArgument("size", "frame is empty");
   if (size == 0) size = register_size(width, height, mask);
   if (size < mask) throw InvalidArgument("register_size", "must be >= the mask");
@@ -82,9 +82,10 @@ FramePlan plan_frame(std::ptrdiff_t width, std::ptrdiff_t height, int mask, int 
     plan.parts = vertical_parts(plan.scan_width, parts);
     if (plan.max_line_length() <= size) return plan;
   }
-  throw InvalidArgument("parts", std::to_string(parts) + " part(s) of a " + std::to_string(width) + " x " +
-                            std::to_string(height) + " frame do not fit a " + std::to_string(size) +
-                            "-stage register with mask " + std::to_string(mask));
+  throw InvalidArgument("parts", std::to_string(parts) + " part(s) of a " + std::to_string(width) +
+                                     " x " + std::to_string(height) + " frame do not fit a " +
+                                     std::to_string(size) + "-stage register with mask " +
+                                     std::to_string(mask));
 }
 
 }  // namespace tridiff::ipf

@@ -26,7 +26,7 @@ inline int resolve_threads(int threads) {
   if (threads < 0) throw InvalidArgument("threads", "must be >= 0 (0: all cores)");
   if (threads > kMaxThreads)
     throw InvalidArgument("threads", "must be at most " + std::to_string(kMaxThreads) + ", got " +
-                              std::to_string(threads));
+                                         std::to_string(threads));
 #ifdef _OPENMP
   // 0 follows OMP_NUM_THREADS, which nothing else bounds.
   return threads == 0 ? std::min(omp_get_max_threads(), kMaxThreads) : threads;

@@ -36,9 +36,9 @@ struct BorderSet {
 std::ptrdiff_t border_index(std::ptrdiff_t i, std::ptrdiff_t n, Border border);
 
 struct BlurOptions {
-  double sigma = 1;                 // the target Gaussian's standard deviation, in pixels
+  double sigma = 1;  // the target Gaussian's standard deviation, in pixels
   Border border = Border::replicate;
-  int threads = 0;                  // 0: all cores
+  int threads = 0;  // 0: all cores
 };
 
 // out = blur of `in`. The views have the same size and do not overlap.
@@ -46,13 +46,13 @@ using BlurRun = void (*)(Plane out, ConstPlane in, const BlurOptions& options);
 
 struct BlurMethod {
   std::string_view name;
-  std::string_view summary;        // what it is, and the seed section it comes from
-  bool exact;                      // a Gaussian up to float rounding (max error <= 1e-5)
-  double max_error;                // the stated bound: max |out - exact Gaussian of sigma| on
-                                   // images in [0, 1], for sigma in [min_sigma, max_sigma]
-  double min_sigma, max_sigma;     // the sigmas the method accepts
-  BorderSet borders;               // the borders it supports
-  std::string_view cost;           // how the work grows with the image and sigma
+  std::string_view summary;     // what it is, and the seed section it comes from
+  bool exact;                   // a Gaussian up to float rounding (max error <= 1e-5)
+  double max_error;             // the stated bound: max |out - exact Gaussian of sigma| on
+                                // images in [0, 1], for sigma in [min_sigma, max_sigma]
+  double min_sigma, max_sigma;  // the sigmas the method accepts
+  BorderSet borders;            // the borders it supports
+  std::string_view cost;        // how the work grows with the image and sigma
   BlurRun run;
 };
 

@@ -73,8 +73,7 @@ void convolve_separable(Plane out, ConstPlane in, std::span<const float> kx,
                         std::span<const float> ky, Border border, int threads = 0);
 
 // out = in convolved with a 2D kernel, summed tap by tap. O(pixels |kernel|).
-void convolve_2d(Plane out, ConstPlane in, const Kernel2D& kernel, Border border,
-                 int threads = 0);
+void convolve_2d(Plane out, ConstPlane in, const Kernel2D& kernel, Border border, int threads = 0);
 
 // The same two convolutions through the FFT (blur/src/fft_convolve.cpp): single-precision
 // FFTW, the plane padded by the kernel radius with the border rule (replicate, mirror, zero) or
@@ -82,8 +81,7 @@ void convolve_2d(Plane out, ConstPlane in, const Kernel2D& kernel, Border border
 // kernel size, only on the padded size: O(N log N).
 void fft_convolve_separable(Plane out, ConstPlane in, std::span<const float> kx,
                             std::span<const float> ky, Border border, int threads = 0);
-void fft_convolve(Plane out, ConstPlane in, const Kernel2D& kernel, Border border,
-                  int threads = 0);
+void fft_convolve(Plane out, ConstPlane in, const Kernel2D& kernel, Border border, int threads = 0);
 
 namespace blur_detail {
 // The argument checks the functions above share: in non-empty, out the same size and not

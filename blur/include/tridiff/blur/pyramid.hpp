@@ -48,8 +48,8 @@ std::string_view pyramid_filter_name(PyramidFilter filter);
 // coarse_sigma < 0 or not finite, a border other than replicate, threads < 0 (0: all cores).
 void pyramid_blur(Plane out, ConstPlane in, PyramidFilter filter, int levels,
                   Border border = Border::replicate, int threads = 0);
-void pyramid_blur(Plane out, ConstPlane in, PyramidFilter filter, int levels,
-                  double coarse_sigma, Border border, int threads);
+void pyramid_blur(Plane out, ConstPlane in, PyramidFilter filter, int levels, double coarse_sigma,
+                  Border border, int threads);
 
 // The effective sigma of `levels` levels (>= 1) of `filter`, in input pixels: the sigma of the
 // Gaussian nearest to it in mean absolute difference (seed 001 §4.1.2), measured with

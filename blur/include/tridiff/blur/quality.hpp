@@ -17,9 +17,9 @@ namespace tridiff {
 struct BlurError {
   double max_abs = 0;  // max |approx - exact|
   double rmse = 0;
-  double psnr = 0;     // 10 log10(1 / mse), peak 1 (images in [0, 1]); +inf when equal
-  double ssim = 0;     // mean SSIM (Wang et al. 2004: Gaussian window sigma 1.5, K1 0.01,
-                       // K2 0.03, L 1), replicate border
+  double psnr = 0;  // 10 log10(1 / mse), peak 1 (images in [0, 1]); +inf when equal
+  double ssim = 0;  // mean SSIM (Wang et al. 2004: Gaussian window sigma 1.5, K1 0.01,
+                    // K2 0.03, L 1), replicate border
 };
 
 BlurError blur_error(ConstPlane approx, const DoublePlane& exact);

@@ -33,7 +33,6 @@ std::vector<double> sampled_gaussian(double sigma, std::ptrdiff_t radius);
 // Separable convolution with sampled_gaussian(sigma, reference_radius(sigma)) in double, with
 // the given border. InvalidArgument unless sigma is finite and > 0.
 DoublePlane reference_gaussian(ConstPlane in, double sigma, Border border, int threads = 0);
-DoublePlane reference_gaussian(const DoublePlane& in, double sigma, Border border,
-                               int threads = 0);
+DoublePlane reference_gaussian(const DoublePlane& in, double sigma, Border border, int threads = 0);
 
 }  // namespace tridiff

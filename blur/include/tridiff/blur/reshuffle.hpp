@@ -29,8 +29,8 @@ struct ReshuffledKernel {
   struct Link {
     std::ptrdiff_t dx, dy;  // the input pixel (x + dx, y + dy) feeds output (x, y)
   };
-  std::vector<double> weights;            // the unique nonzero weights
-  std::vector<std::vector<Link>> links;   // links[i]: the linkage set of weights[i]
+  std::vector<double> weights;                // the unique nonzero weights
+  std::vector<std::vector<Link>> links;       // links[i]: the linkage set of weights[i]
   std::ptrdiff_t radius_x = 0, radius_y = 0;  // the kernel's half-sizes
 
   std::ptrdiff_t taps() const;  // the number of links, i.e. of nonzero taps

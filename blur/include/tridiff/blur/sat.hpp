@@ -67,8 +67,8 @@ class TiledFloatSummedAreaTable {
     if (x < 0 || y < 0) return 0;
     const std::ptrdiff_t tx = x / kTile, ty = y / kTile, tile = ty * tiles_x_ + tx;
     const double area = double(x - tx * kTile + 1) * double(y - ty * kTile + 1);
-    return top_[ty * width_ + x] + left_[tx * height_ + y] - corner_[tile] +
-           mean_[tile] * area + local_[y * width_ + x];
+    return top_[ty * width_ + x] + left_[tx * height_ + y] - corner_[tile] + mean_[tile] * area +
+           local_[y * width_ + x];
   }
   double replicate_box_sum(std::ptrdiff_t x0, std::ptrdiff_t y0, std::ptrdiff_t x1,
                            std::ptrdiff_t y1) const;

@@ -52,11 +52,11 @@ std::string format_method_table(std::span<const MethodTableRow> rows);
 std::span<const MethodTableRow> builtin_method_table();
 
 struct MethodChoice {
-  std::string method;          // the chosen method's registered name
+  std::string method;  // the chosen method's registered name
   double predicted_seconds = 0;
   double expected_psnr = 0;
   bool meets_budget = false;
-  std::string reason;          // one paragraph: the frame, the budget, the choice, the rivals
+  std::string reason;  // one paragraph: the frame, the budget, the choice, the rivals
 };
 
 // The choice for the CoC map `coc` at `settings` (in_focus_coc_px, error_budget_psnr) from

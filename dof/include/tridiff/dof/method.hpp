@@ -16,11 +16,11 @@
 namespace tridiff {
 
 struct DofOptions {
-  int threads = 0;                 // 0: all cores
-  bool skip_in_focus = true;       // false: every pixel takes the full path (the reference)
-  bool layers = false;             // blur the near field as its own layer (Kass et al. 2006)
-  float in_focus_coc_px = 1.f;     // |CoC| below this (a sub-pixel blur) counts as sharp
-  double error_budget_psnr = 30;   // `auto`: the least PSNR (dB) against scatter to accept
+  int threads = 0;                       // 0: all cores
+  bool skip_in_focus = true;             // false: every pixel takes the full path (the reference)
+  bool layers = false;                   // blur the near field as its own layer (Kass et al. 2006)
+  float in_focus_coc_px = 1.f;           // |CoC| below this (a sub-pixel blur) counts as sharp
+  double error_budget_psnr = 30;         // `auto`: the least PSNR (dB) against scatter to accept
   std::function<void(double)> progress;  // fraction done, 0..1; may be empty
 };
 

@@ -10,8 +10,7 @@ namespace tridiff {
 
 // The piecewise sRGB curve (IEC 61966-2-1): linear segment below 0.04045 / 0.0031308.
 inline float srgb_to_linear(float encoded) {
-  return encoded <= 0.04045f ? encoded / 12.92f
-                             : std::pow((encoded + 0.055f) / 1.055f, 2.4f);
+  return encoded <= 0.04045f ? encoded / 12.92f : std::pow((encoded + 0.055f) / 1.055f, 2.4f);
 }
 inline float linear_to_srgb(float linear) {
   if (!(linear > 0.0031308f)) return 12.92f * std::max(linear, 0.f);

@@ -49,8 +49,7 @@ class PlaneView {
       : data_(data), width_(width), height_(height), pitch_(pitch) {}
   // A writable view converts to a read-only one.
   template <class U>
-    requires std::is_same_v<T, const U>
-  PlaneView(const PlaneView<U>& other)
+  requires std::is_same_v<T, const U> PlaneView(const PlaneView<U>& other)
       : PlaneView(other.data(), other.width(), other.height(), other.pitch()) {}
 
   T* data() const { return data_; }
@@ -85,7 +84,9 @@ class Image {
   static constexpr std::ptrdiff_t kPitchAlign = 16;
 
   Image() = default;
-  Image(std::ptrdiff_t width, std::ptrdiff_t height, int channels) { reset(width, height, channels); }
+  Image(std::ptrdiff_t width, std::ptrdiff_t height, int channels) {
+    reset(width, height, channels);
+  }
 
   Image(Image&&) noexcept = default;
   Image& operator=(Image&&) noexcept = default;
@@ -109,8 +110,8 @@ class Image {
   // Reallocates as width x height x channels, every value zero.
   void reset(std::ptrdiff_t width, std::ptrdiff_t height, int channels) {
     if (width < 1 || height < 1)
-      throw InvalidArgument("size", "image must be at least 1 x 1, got " + std::to_string(width) + " x " +
-                                std::to_string(height));
+      throw InvalidArgument("size", "image must be at least 1 x 1, got " + std::to_string(width) +
+                                        " x " + std::to_string(height));
     if (channels < 1) throw InvalidArgument("channels", "must be at least 1");
     width_ = width;
     height_ = height;
@@ -149,8 +150,8 @@ class Image {
   std::ptrdiff_t size() const { return plane_stride() * channels_; }
   void check_channel(int channel) const {
     if (channel < 0 || channel >= channels_)
-      throw InvalidArgument("channel", std::to_string(channel) + " is not in [0, " +
-                                std::to_string(channels_) + ")");
+      throw InvalidArgument(
+          "channel", std::to_string(channel) + " is not in [0, " + std::to_string(channels_) + ")");
   }
 
   detail::FloatStorage storage_;
@@ -171,8 +172,8 @@ inline void require_size(const Image& image, std::ptrdiff_t width, std::ptrdiff_
                          const std::string& what) {
   if (image.width() != width || image.height() != height)
     throw InvalidArgument(what, "is " + std::to_string(image.width()) + " x " +
-                              std::to_string(image.height()) + ", expected " +
-                              std::to_string(width) + " x " + std::to_string(height));
+                                    std::to_string(image.height()) + ", expected " +
+                                    std::to_string(width) + " x " + std::to_string(height));
 }
 
 }  // namespace tridiff

@@ -26,8 +26,8 @@ enum class ColorEncoding {
 };
 
 struct ColorImage {
-  Image pixels;                  // linear light, 3 channels (RGB) or 4 (RGBA)
-  ColorEncoding encoding;        // what the file held (never Auto)
+  Image pixels;            // linear light, 3 channels (RGB) or 4 (RGBA)
+  ColorEncoding encoding;  // what the file held (never Auto)
 };
 
 // The most pixels a file may declare before reading it is refused: a 16384 x 16384 image.
@@ -62,7 +62,7 @@ struct DepthOptions {
                         // channel of a grey image (all channels but alpha equal at every
                         // pixel); any other file is an error listing its channels
   DepthConvention convention = DepthConvention::Linear;
-  float near_plane = 0.f, far_plane = 0.f;  // for Normalized
+  float near_plane = 0.f, far_plane = 0.f;      // for Normalized
   std::int64_t max_pixels = kDefaultMaxPixels;  // as for read_color
 };
 

@@ -38,8 +38,8 @@ class InvalidArgument : public Error {
   std::ptrdiff_t row() const noexcept { return row_; }
 
  private:
-  static std::string compose(const std::string& argument, std::ptrdiff_t system,
-                             std::ptrdiff_t row, const std::string& message) {
+  static std::string compose(const std::string& argument, std::ptrdiff_t system, std::ptrdiff_t row,
+                             const std::string& message) {
     std::string where = "argument '" + argument + "'";
     if (system >= 0) where += ", system " + std::to_string(system);
     if (row >= 0) where += ", row " + std::to_string(row);

@@ -48,13 +48,16 @@ struct BatchLayout {
 // Throws InvalidArgument unless the layout describes n >= 1 unknowns in count >= 1 systems
 // with positive strides, and no two (system, row) pairs share an element.
 inline void validate_layout(const BatchLayout& layout) {
-  if (layout.n < 1) throw InvalidArgument("n", "must be at least 1, got " + std::to_string(layout.n));
+  if (layout.n < 1)
+    throw InvalidArgument("n", "must be at least 1, got " + std::to_string(layout.n));
   if (layout.count < 1)
     throw InvalidArgument("count", "must be at least 1, got " + std::to_string(layout.count));
   if (layout.row_stride < 1 && layout.n > 1)
-    throw InvalidArgument("row_stride", "must be positive, got " + std::to_string(layout.row_stride));
+    throw InvalidArgument("row_stride",
+                          "must be positive, got " + std::to_string(layout.row_stride));
   if (layout.system_stride < 1 && layout.count > 1)
-    throw InvalidArgument("system_stride", "must be positive, got " + std::to_string(layout.system_stride));
+    throw InvalidArgument("system_stride",
+                          "must be positive, got " + std::to_string(layout.system_stride));
   // First, so that the products below cannot overflow: each is at most max_extent plus a
   // stride that is itself at most max_extent.
   const auto max_extent = std::numeric_limits<std::ptrdiff_t>::max() / 4;
@@ -68,7 +71,8 @@ inline void validate_layout(const BatchLayout& layout) {
     const std::ptrdiff_t inner_count = rows_inner ? layout.n : layout.count;
     const std::ptrdiff_t outer_stride = rows_inner ? layout.system_stride : layout.row_stride;
     if (outer_stride < inner_stride * inner_count)
-      throw InvalidArgument(rows_inner ? "system_stride" : "row_stride", "systems overlap in memory: stride " + std::to_string(outer_stride) +
+      throw InvalidArgument(rows_inner ? "system_stride" : "row_stride",
+                            "systems overlap in memory: stride " + std::to_string(outer_stride) +
                                 " is smaller than " + std::to_string(inner_stride * inner_count));
   }
 }

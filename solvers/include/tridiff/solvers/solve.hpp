@@ -86,7 +86,8 @@ inline constexpr auto kAllMethods = [] {
 inline const MethodRow& method_row(Method method) {
   for (const MethodRow& row : kMethodTable)
     if (row.method == method) return row;
-  throw InvalidArgument("method", "is not a Method (" + std::to_string(static_cast<int>(method)) + ")");
+  throw InvalidArgument("method",
+                        "is not a Method (" + std::to_string(static_cast<int>(method)) + ")");
 }
 
 inline const char* to_string(Method method) {
@@ -104,13 +105,14 @@ inline Method method_named(std::string_view name) {
     if (row.name == name) return row.method;
     known += (known.empty() ? "" : ", ") + std::string(row.name);
   }
-  throw InvalidArgument("method", "unknown solver method '" + std::string(name) + "' (known: " + known + ")");
+  throw InvalidArgument("method",
+                        "unknown solver method '" + std::string(name) + "' (known: " + known + ")");
 }
 
 struct SolveOptions {
   Method method = Method::Auto;
-  int threads = 0;         // 0: all cores; at most kMaxThreads (tridiff/threads.hpp)
-  bool periodic = false;   // sub[0] is entry (0, n-1) and super[n-1] entry (n-1, 0)
+  int threads = 0;        // 0: all cores; at most kMaxThreads (tridiff/threads.hpp)
+  bool periodic = false;  // sub[0] is entry (0, n-1) and super[n-1] entry (n-1, 0)
   // The pivot-free methods are stable only for diagonally dominant matrices (by rows or by
   // columns). With this set they refuse other matrices (NumericalError naming system and row);
   // clear it to skip the check when dominance is known, e.g. built into the problem.
@@ -155,7 +157,8 @@ void require_disjoint(const In* input, const char* input_name, const Out* output
   const auto end_in = begin_in + static_cast<std::uintptr_t>(layout.extent()) * sizeof(In);
   const auto end_out = begin_out + static_cast<std::uintptr_t>(layout.extent()) * sizeof(Out);
   if (begin_in < end_out && begin_out < end_in)
-    throw InvalidArgument("x", std::string("overlaps '") + input_name +
+    throw InvalidArgument("x",
+                          std::string("overlaps '") + input_name +
                               "' (only rhs may be the same array as x, for an in-place solve)");
 }
 
@@ -168,7 +171,8 @@ struct Scratch {
   static constexpr std::ptrdiff_t kKeepBytes = std::ptrdiff_t(64) << 20;
   void trim() {
     if ((work.size() + slab.size()) * std::ptrdiff_t(sizeof(T)) +
-            real_work.size() * std::ptrdiff_t(sizeof(real_t<T>)) > kKeepBytes)
+            real_work.size() * std::ptrdiff_t(sizeof(real_t<T>)) >
+        kKeepBytes)
       *this = Scratch{};
   }
 };
@@ -203,8 +207,8 @@ void for_each_chunk(std::ptrdiff_t count, std::ptrdiff_t chunk, int threads, Bod
 }
 
 template <class T>
-SystemView<T> system_view(const T* a, const T* b, const T* c, const T* d,
-                          const BatchLayout& layout, std::ptrdiff_t s, bool periodic) {
+SystemView<T> system_view(const T* a, const T* b, const T* c, const T* d, const BatchLayout& layout,
+                          std::ptrdiff_t s, bool periodic) {
   const std::ptrdiff_t o = layout.offset(s, 0), rs = layout.row_stride;
   return {{a + o, rs}, {b + o, rs}, {c + o, rs}, {d + o, rs}, layout.n, periodic};
 }
@@ -237,8 +241,9 @@ void solve_one(const SystemView<T>& s, Strided<T> x, Method method, bool periodi
   work.resize(n + (periodic ? periodic_workspace(n, inner_work) : inner_work));
   const Strided<T> result{work.data(), 1};
   T* kernel_work = work.data() + n;
-  const std::ptrdiff_t bad = periodic ? detail::periodic(n, s.a, s.b, s.c, s.d, result, kernel_work, inner)
-                                      : inner(n, s.a, s.b, s.c, s.d, result, kernel_work);
+  const std::ptrdiff_t bad =
+      periodic ? detail::periodic(n, s.a, s.b, s.c, s.d, result, kernel_work, inner)
+               : inner(n, s.a, s.b, s.c, s.d, result, kernel_work);
   if (bad >= 0) report_breakdown(s, system, bad, to_string(method));
   for (std::ptrdiff_t i = 0; i < n; ++i)
     if (!is_finite(result[i])) report_breakdown(s, system, -1, to_string(method));
@@ -289,7 +294,6 @@ bool check_system_parallel(const SystemView<T>& s, std::ptrdiff_t system, Method
   return accept_dominance<T>(whole, system, method, refuse);
 }
 
-
 // Below this many rows a single system is not worth splitting across threads: the partitioned
 // method moves about twice the data of Thomas and needs a barrier.
 inline constexpr std::ptrdiff_t kPartitionedMinRows = std::ptrdiff_t(1) << 15;
@@ -331,8 +335,8 @@ int solve_partitioned(const SystemView<T>& s, Strided<T> x, int threads, std::pt
     if (proceed) {
 #pragma omp for schedule(static)
       for (int p = 0; p < parts; ++p)
-        finite[p] = partition_finish(bounds[p], bounds[p + 1], eliminated, coupling_a,
-                                     coupling_c, target);
+        finite[p] =
+            partition_finish(bounds[p], bounds[p + 1], eliminated, coupling_a, coupling_c, target);
       if (in_place && std::find(finite.begin(), finite.end(), 0) == finite.end()) {
 #pragma omp for schedule(static)
         for (int p = 0; p < parts; ++p)
@@ -414,9 +418,9 @@ void require_valid_beta(Strided<const R> beta, std::ptrdiff_t n, bool periodic,
   for (std::ptrdiff_t i = 0; i < links; ++i) {
     if (!std::isfinite(beta[i])) throw InvalidArgument("beta", system, i, "is not finite");
     if (beta[i] < 0)
-      throw InvalidArgument("beta", system, i,
-                            "is negative (" + std::to_string(beta[i]) +
-                                "): a conductance must be >= 0");
+      throw InvalidArgument(
+          "beta", system, i,
+          "is negative (" + std::to_string(beta[i]) + "): a conductance must be >= 0");
   }
 }
 
@@ -489,8 +493,8 @@ SolveReport solve(const T* sub, const T* diag, const T* super, const T* rhs, T* 
       const auto view = system_view(sub, diag, super, rhs, layout, s, options.periodic);
       local_pivoted += dominant[l] ? 0 : 1;
       solve_one(view, Strided<T>{x + layout.offset(s, 0), layout.row_stride},
-                dominant[l] ? fast : Method::Pivoting, options.periodic,
-                options.hybrid_pcr_below, scratch.work, s);
+                dominant[l] ? fast : Method::Pivoting, options.periodic, options.hybrid_pcr_below,
+                scratch.work, s);
     }
     if (local_pivoted > 0) {
       std::lock_guard<std::mutex> lock(count_guard);
@@ -560,8 +564,8 @@ SolveReport solve_diffusion(const real_t<T>* beta, const T* rhs, T* x, const Bat
       T* diag = a + n;
       T* c = diag + n;
       expand_diffusion(b, n, options.periodic, a, diag, c);
-      const SystemView<T> view{{a, 1}, {diag, 1}, {c, 1}, {rhs + o, layout.row_stride}, n,
-                               options.periodic};
+      const SystemView<T> view{{a, 1}, {diag, 1},       {c, 1}, {rhs + o, layout.row_stride},
+                               n,      options.periodic};
       solve_one(view, Strided<T>{x + o, layout.row_stride}, fast, options.periodic,
                 options.hybrid_pcr_below, scratch.work, s);
     }

@@ -71,8 +71,8 @@ struct Segment {
 // links t0*kTile ... (t1+1)*kTile - 1, so its system spans pixels t0*kTile ... (t1+1)*kTile; the
 // links on either side are zero (they lie in inactive tiles or outside the image), so the
 // systems are exactly decoupled from the pixels around them.
-inline void find_segments(const std::vector<std::uint8_t>& active, std::ptrdiff_t extent,
-                          bool skip, std::vector<Segment>& segments) {
+inline void find_segments(const std::vector<std::uint8_t>& active, std::ptrdiff_t extent, bool skip,
+                          std::vector<Segment>& segments) {
   segments.clear();
   if (!skip) {
     segments.push_back({0, extent});
@@ -138,8 +138,8 @@ void for_each_band(std::ptrdiff_t bands, int threads, Body&& body) {
 }
 
 [[noreturn]] inline void throw_not_finite(std::ptrdiff_t x, std::ptrdiff_t y) {
-  throw InvalidArgument("src", "pixel (" + std::to_string(x) + ", " + std::to_string(y) +
-                            "): is not finite");
+  throw InvalidArgument(
+      "src", "pixel (" + std::to_string(x) + ", " + std::to_string(y) + "): is not finite");
 }
 
 // dst[0, n) = src[0, n); throws naming the pixel if a value is not finite (the solves check
@@ -218,8 +218,8 @@ void solve_row_segment(const Source& source, const PlaneStack<float>& dst,
     source.template row_link_lanes<W>(y0, count, s.begin + begin, columns,
                                       scratch.zero_row(src.width), links);
     for (int c = 0; c < Rhs; ++c)
-      detail::gather_into_lanes<float, W>(in[c], s.begin + begin, columns, block + c * kRowBlock * W,
-                                          s.end);
+      detail::gather_into_lanes<float, W>(in[c], s.begin + begin, columns,
+                                          block + c * kRowBlock * W, s.end);
     sweep.forward(begin, begin + columns, links, W, block, W, kRowBlock * W);
   }
   if (!sweep.healthy()) throw_first_bad_pixel(src, s.begin, s.end, y0, y0 + count);
@@ -227,8 +227,8 @@ void solve_row_segment(const Source& source, const PlaneStack<float>& dst,
     const std::ptrdiff_t columns = std::min(n, begin + kRowBlock) - begin;
     sweep.backward(begin, begin + columns, block, W, kRowBlock * W);
     for (int c = 0; c < Rhs; ++c)
-      detail::scatter_from_lanes<float, W>(block + c * kRowBlock * W, columns, out[c], s.begin + begin,
-                                           true);
+      detail::scatter_from_lanes<float, W>(block + c * kRowBlock * W, columns, out[c],
+                                           s.begin + begin, true);
   }
   detail::finish_streaming_stores();
 }
@@ -314,9 +314,12 @@ template <class Solve>
 void for_each_plane_group(int planes, Solve&& solve) {
   for (int c0 = 0; c0 < planes; c0 += kMaxRhs) {
     const int group = std::min(kMaxRhs, planes - c0);
-    if (group == 3) solve.template operator()<3>(c0);
-    else if (group == 2) solve.template operator()<2>(c0);
-    else solve.template operator()<1>(c0);
+    if (group == 3)
+      solve.template operator()<3>(c0);
+    else if (group == 2)
+      solve.template operator()<2>(c0);
+    else
+      solve.template operator()<1>(c0);
   }
   static_assert(kMaxRhs == 3);
 }
@@ -350,47 +353,48 @@ DiffusionReport run_pass(Direction direction, const PlaneStack<float>& dst,
   const bool in_place = dst.data == src.data;
   std::vector<std::ptrdiff_t> solved(bands, 0);
 
-  for_each_band(bands, resolve_threads(options.threads),
-                [&](std::ptrdiff_t band, BandScratch& scratch) {
-    const std::ptrdiff_t first = band * kTile;  // first row (rows) or column (columns)
-    const std::ptrdiff_t count = std::min(kTile, (rows ? height : width) - first);
-    source.activity(direction, band, scratch.active);
-    find_segments(scratch.active, length, options.skip_inactive, scratch.segments);
-    // Copies pixels [from, to) along every system of the band (the parts not solved).
-    auto copy_span = [&](std::ptrdiff_t from, std::ptrdiff_t to) {
-      if (in_place || to <= from) return;
-      for (int c = 0; c < src.count; ++c) {
-        if (rows)
-          for (std::ptrdiff_t y = first; y < first + count; ++y)
-            copy_finite(dst.row(c, y) + from, src.row(c, y) + from, to - from, from, y);
-        else
-          for (std::ptrdiff_t y = from; y < to; ++y)
-            copy_finite(dst.row(c, y) + first, src.row(c, y) + first, count, first, y);
-      }
-    };
-    std::ptrdiff_t copied_to = 0;
-    for (const Segment& s : scratch.segments) {
-      copy_span(copied_to, s.begin);
-      const std::ptrdiff_t n = s.end - s.begin;
-      if (rows) {
-        for (std::ptrdiff_t sub = 0; sub < count; sub += kRowLanes)
-          for_each_plane_group(src.count, [&]<int Rhs>(int c0) {
-            solve_row_segment<kRowLanes, Rhs>(source, dst, src, c0, first + sub,
-                                              std::min(kRowLanes, count - sub), s, scratch);
-          });
-      } else {
-        float* work = scratch.floats(column_scratch_floats(n));
-        for (std::ptrdiff_t sub = 0; sub < count; sub += kColumnLanes)
-          for_each_plane_group(src.count, [&]<int Rhs>(int c0) {
-            solve_column_segment<kColumnLanes, Rhs>(source, dst, src, c0, first + sub,
-                                                    std::min(kColumnLanes, count - sub), s, work);
-          });
-      }
-      solved[band] += n * count * src.count;
-      copied_to = s.end;
-    }
-    copy_span(copied_to, length);
-  });
+  for_each_band(
+      bands, resolve_threads(options.threads), [&](std::ptrdiff_t band, BandScratch& scratch) {
+        const std::ptrdiff_t first = band * kTile;  // first row (rows) or column (columns)
+        const std::ptrdiff_t count = std::min(kTile, (rows ? height : width) - first);
+        source.activity(direction, band, scratch.active);
+        find_segments(scratch.active, length, options.skip_inactive, scratch.segments);
+        // Copies pixels [from, to) along every system of the band (the parts not solved).
+        auto copy_span = [&](std::ptrdiff_t from, std::ptrdiff_t to) {
+          if (in_place || to <= from) return;
+          for (int c = 0; c < src.count; ++c) {
+            if (rows)
+              for (std::ptrdiff_t y = first; y < first + count; ++y)
+                copy_finite(dst.row(c, y) + from, src.row(c, y) + from, to - from, from, y);
+            else
+              for (std::ptrdiff_t y = from; y < to; ++y)
+                copy_finite(dst.row(c, y) + first, src.row(c, y) + first, count, first, y);
+          }
+        };
+        std::ptrdiff_t copied_to = 0;
+        for (const Segment& s : scratch.segments) {
+          copy_span(copied_to, s.begin);
+          const std::ptrdiff_t n = s.end - s.begin;
+          if (rows) {
+            for (std::ptrdiff_t sub = 0; sub < count; sub += kRowLanes)
+              for_each_plane_group(src.count, [&]<int Rhs>(int c0) {
+                solve_row_segment<kRowLanes, Rhs>(source, dst, src, c0, first + sub,
+                                                  std::min(kRowLanes, count - sub), s, scratch);
+              });
+          } else {
+            float* work = scratch.floats(column_scratch_floats(n));
+            for (std::ptrdiff_t sub = 0; sub < count; sub += kColumnLanes)
+              for_each_plane_group(src.count, [&]<int Rhs>(int c0) {
+                solve_column_segment<kColumnLanes, Rhs>(source, dst, src, c0, first + sub,
+                                                        std::min(kColumnLanes, count - sub), s,
+                                                        work);
+              });
+          }
+          solved[band] += n * count * src.count;
+          copied_to = s.end;
+        }
+        copy_span(copied_to, length);
+      });
   DiffusionReport report{width * height * src.count, 0};
   for (std::ptrdiff_t s : solved) report.pixels_solved += s;
   return report;
@@ -400,17 +404,17 @@ inline void require_same_size(std::ptrdiff_t width, std::ptrdiff_t height, Const
                               const char* what) {
   if (other.width() != width || other.height() != height)
     throw InvalidArgument(what, "is " + std::to_string(other.width()) + " x " +
-                              std::to_string(other.height()) + ", the source is " +
-                              std::to_string(width) + " x " + std::to_string(height));
+                                    std::to_string(other.height()) + ", the source is " +
+                                    std::to_string(width) + " x " + std::to_string(height));
 }
 
 inline PlaneStack<const float> stack_of(const Image& image) {
-  return {image.data(), image.width(), image.height(), image.pitch(), image.plane_stride(),
-          image.channels()};
+  return {image.data(),  image.width(),        image.height(),
+          image.pitch(), image.plane_stride(), image.channels()};
 }
 inline PlaneStack<float> stack_of(Image& image) {
-  return {image.data(), image.width(), image.height(), image.pitch(), image.plane_stride(),
-          image.channels()};
+  return {image.data(),  image.width(),        image.height(),
+          image.pitch(), image.plane_stride(), image.channels()};
 }
 
 // Both passes over every channel: rows from src into dst, then columns in place in dst.
@@ -442,8 +446,10 @@ class PixelConductance {
         tiles_y_((value.height() + kTile - 1) / kTile),
         conducting_(tiles_x_ * tiles_y_, 0) {
     bool bad = false;
+// clang-format off
 #pragma omp parallel for num_threads(resolve_threads(threads)) schedule(dynamic, 1) \
     reduction(|| : bad) if (tiles_y_ > 1)
+    // clang-format on
     for (std::ptrdiff_t ty = 0; ty < tiles_y_; ++ty) bad = scan_tile_row(ty) || bad;
     if (bad) throw_bad_conductance(value_, to_link_);  // names the first bad pixel
   }

@@ -20,8 +20,9 @@ template <class ToLink>
       const float k = to_link(value(x, y));
       if (!(k >= 0) || !std::isfinite(k))
         throw InvalidArgument("value", "pixel (" + std::to_string(x) + ", " + std::to_string(y) +
-                                  "): " + std::to_string(value(x, y)) + " maps to conductance " +
-                                  std::to_string(k) + "; it must be finite and >= 0");
+                                           "): " + std::to_string(value(x, y)) +
+                                           " maps to conductance " + std::to_string(k) +
+                                           "; it must be finite and >= 0");
     }
   throw InvalidArgument("value", "a conductance is not finite and >= 0");
 }
@@ -49,8 +50,7 @@ LinkField links_from_pixels(ConstPlane value, ToLink to_link, int threads) {
         if (row) {
 #pragma omp simd
           for (std::ptrdiff_t x = 0; x < width; ++x) here[x] = to_link(row[x]);
-        }
-        else
+        } else
           here.swap(below);  // row y's conductances were computed as "below" of row y - 1
         float* h = horizontal.row(y);
         float* v = vertical.row(y);

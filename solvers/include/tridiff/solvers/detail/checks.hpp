@@ -32,8 +32,8 @@ void with_unit_stride_if_possible(const SystemView<T>& s, Body&& body) {
 
 // Throws InvalidArgument naming the first non-finite coefficient of rows [begin, end).
 template <class T>
-void require_finite_matrix(const SystemView<T>& s, std::ptrdiff_t system,
-                           std::ptrdiff_t begin = 0, std::ptrdiff_t end = -1) {
+void require_finite_matrix(const SystemView<T>& s, std::ptrdiff_t system, std::ptrdiff_t begin = 0,
+                           std::ptrdiff_t end = -1) {
   using R = real_t<T>;
   if (end < 0) end = s.n;
   // A vectorised pass over the rows whose three entries are all read: value * 0 is NaN
@@ -85,7 +85,9 @@ Dominance dominance_by_row(const SystemView<T>& s, std::ptrdiff_t begin, std::pt
   const R slack = 1 - 4 * epsilon<T>;
   const std::ptrdiff_t n = s.n;
   auto entry_a = [&](std::ptrdiff_t i) { return (i > 0 || s.periodic) ? magnitude(s.a[i]) : R(0); };
-  auto entry_c = [&](std::ptrdiff_t i) { return (i + 1 < n || s.periodic) ? magnitude(s.c[i]) : R(0); };
+  auto entry_c = [&](std::ptrdiff_t i) {
+    return (i + 1 < n || s.periodic) ? magnitude(s.c[i]) : R(0);
+  };
   Dominance result;
   for (std::ptrdiff_t i = begin; i < end; ++i) {
     const R diagonal = magnitude(s.b[i]);

@@ -34,9 +34,7 @@ inline std::ptrdiff_t cyclic_reduction_workspace(std::ptrdiff_t n) {
 }
 
 // Original row index of row k of the level reached after `depth` halvings.
-inline std::ptrdiff_t original_row(std::ptrdiff_t k, int depth) {
-  return ((k + 1) << depth) - 1;
-}
+inline std::ptrdiff_t original_row(std::ptrdiff_t k, int depth) { return ((k + 1) << depth) - 1; }
 
 // PCR on a contiguous level of m rows; `spare` holds 4m scalars; solution into x.
 // Returns -1, or the (level) row whose pivot vanished.
@@ -57,8 +55,8 @@ std::ptrdiff_t parallel_cyclic_reduction(std::ptrdiff_t m, Level<T> now, T* spar
         return i;
       next.a[i] = left ? alpha * now.a[i - s] : T(0);
       next.c[i] = right ? gamma * now.c[i + s] : T(0);
-      next.d[i] = now.d[i] + (left ? alpha * now.d[i - s] : T(0)) +
-                  (right ? gamma * now.d[i + s] : T(0));
+      next.d[i] =
+          now.d[i] + (left ? alpha * now.d[i - s] : T(0)) + (right ? gamma * now.d[i + s] : T(0));
     }
     std::swap(now, next);
   }
@@ -93,8 +91,8 @@ std::ptrdiff_t reduce_and_solve(std::ptrdiff_t m, Level<T> level, T* x, T* work,
       return original_row(k, depth + 1);
     reduced.a[k] = alpha * level.a[i - 1];  // eq. 3.13 (level.a[0] is zero)
     reduced.c[k] = right ? gamma * level.c[i + 1] : T(0);
-    reduced.d[k] = level.d[i] + alpha * level.d[i - 1] +
-                   (right ? gamma * level.d[i + 1] : T(0));  // eq. 3.15
+    reduced.d[k] =
+        level.d[i] + alpha * level.d[i - 1] + (right ? gamma * level.d[i + 1] : T(0));  // eq. 3.15
   }
   const std::ptrdiff_t bad =
       reduce_and_solve(h, reduced, reduced_x, work + 5 * h, pcr_below, depth + 1);

@@ -78,9 +78,10 @@ class DiffusionLanes {
   // e + (i - begin) * e_stride + c * e_plane_stride + lane (only n * W reals of workspace are
   // then used). A driver can keep them in the rows the solution will overwrite, which halves
   // what a long system keeps in cache between the sweeps.
-  void forward_to(std::ptrdiff_t begin, std::ptrdiff_t end, const R* beta, std::ptrdiff_t beta_stride,
-                  const T* d, std::ptrdiff_t stride, std::ptrdiff_t plane_stride, T* e_out,
-                  std::ptrdiff_t e_stride, std::ptrdiff_t e_plane_stride) {
+  void forward_to(std::ptrdiff_t begin, std::ptrdiff_t end, const R* beta,
+                  std::ptrdiff_t beta_stride, const T* d, std::ptrdiff_t stride,
+                  std::ptrdiff_t plane_stride, T* e_out, std::ptrdiff_t e_stride,
+                  std::ptrdiff_t e_plane_stride) {
 #if defined(__AVX512F__)
     if constexpr (std::is_same_v<T, float> && W % 16 == 0 && Rhs > 1) {
       forward_to_avx512(begin, end, beta, beta_stride, d, stride, plane_stride, e_out, e_stride,
@@ -144,9 +145,9 @@ class DiffusionLanes {
   }
 
   // backward, reading the eliminated right-hand sides where forward_to put them (e may be x).
-  void backward_from(std::ptrdiff_t begin, std::ptrdiff_t end, const T* e_in, std::ptrdiff_t e_stride,
-                     std::ptrdiff_t e_plane_stride, T* x, std::ptrdiff_t stride,
-                     std::ptrdiff_t plane_stride) {
+  void backward_from(std::ptrdiff_t begin, std::ptrdiff_t end, const T* e_in,
+                     std::ptrdiff_t e_stride, std::ptrdiff_t e_plane_stride, T* x,
+                     std::ptrdiff_t stride, std::ptrdiff_t plane_stride) {
 #if defined(__AVX512F__)
     if constexpr (std::is_same_v<T, float> && W % 16 == 0 && Rhs > 1) {
       backward_from_avx512(begin, end, e_in, e_stride, e_plane_stride, x, stride, plane_stride);
@@ -164,7 +165,8 @@ class DiffusionLanes {
 #pragma omp simd
       for (int l = 0; l < W; ++l)
         for (int c = 0; c < Rhs; ++c) {
-          carry[c][l] = last ? e[c * e_plane_stride + l] : e[c * e_plane_stride + l] + w[l] * carry[c][l];
+          carry[c][l] =
+              last ? e[c * e_plane_stride + l] : e[c * e_plane_stride + l] + w[l] * carry[c][l];
           out[c * plane_stride + l] = carry[c][l];
         }
     }
@@ -207,10 +209,10 @@ class DiffusionLanes {
         const __m512 inverse = _mm512_div_ps(one, _mm512_add_ps(g, beta_here));
         __m512 zero_if_finite = _mm512_mul_ps(beta_here, zero);
         for (int c = 0; c < Rhs; ++c) {
-          const __m512 value = _mm512_mul_ps(
-              _mm512_fmadd_ps(beta_before[v], carry[c][v],
-                              _mm512_loadu_ps(rhs + c * plane_stride + 16 * v)),
-              inverse);
+          const __m512 value =
+              _mm512_mul_ps(_mm512_fmadd_ps(beta_before[v], carry[c][v],
+                                            _mm512_loadu_ps(rhs + c * plane_stride + 16 * v)),
+                            inverse);
           _mm512_storeu_ps(e + c * e_plane_stride + 16 * v, value);
           carry[c][v] = value;
           zero_if_finite = _mm512_fmadd_ps(value, zero, zero_if_finite);
@@ -247,8 +249,7 @@ class DiffusionLanes {
         const __m512 multiplier = _mm512_loadu_ps(w + 16 * v);
         for (int c = 0; c < Rhs; ++c) {
           const __m512 eliminated = _mm512_loadu_ps(e + c * e_plane_stride + 16 * v);
-          carry[c][v] =
-              last ? eliminated : _mm512_fmadd_ps(multiplier, carry[c][v], eliminated);
+          carry[c][v] = last ? eliminated : _mm512_fmadd_ps(multiplier, carry[c][v], eliminated);
           _mm512_storeu_ps(out + c * plane_stride + 16 * v, carry[c][v]);
         }
       }
@@ -302,8 +303,8 @@ inline std::ptrdiff_t staging_pitch(std::ptrdiff_t n) { return (n + 15) / 16 * 1
 template <class T>
 std::ptrdiff_t diffusion_rows_workspace(std::ptrdiff_t n, int lanes) {
   const std::ptrdiff_t per_value = std::ptrdiff_t(sizeof(T) / sizeof(real_t<T>));
-  return diffusion_lanes_workspace<T>(n, lanes) +
-         lanes * staging_pitch(n) * (1 + per_value) + kTransposeBlock * lanes * (1 + per_value);
+  return diffusion_lanes_workspace<T>(n, lanes) + lanes * staging_pitch(n) * (1 + per_value) +
+         kTransposeBlock * lanes * (1 + per_value);
 }
 
 // Contiguous systems (image rows: equation i of system l at l * pitch + i), W at a time.

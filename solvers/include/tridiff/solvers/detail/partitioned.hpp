@@ -78,9 +78,8 @@ inline std::ptrdiff_t partition_reduced_workspace(std::ptrdiff_t parts) { return
 // `eliminated` (the x of step 1).
 // `bounds` holds P + 1 part boundaries; `work` holds partition_reduced_workspace(P) scalars.
 template <class T>
-std::ptrdiff_t partition_solve_reduced(std::ptrdiff_t parts, const std::ptrdiff_t* bounds,
-                                       T* x, const T* coupling_a, const T* coupling_c,
-                                       T* work) {
+std::ptrdiff_t partition_solve_reduced(std::ptrdiff_t parts, const std::ptrdiff_t* bounds, T* x,
+                                       const T* coupling_a, const T* coupling_c, T* work) {
   const std::ptrdiff_t m = 2 * parts;
   T* sub = work;
   T* diag = work + m;
@@ -110,8 +109,8 @@ std::ptrdiff_t partition_solve_reduced(std::ptrdiff_t parts, const std::ptrdiff_
 // Step 3 on rows [s, e): every row from the part's two boundary unknowns, into x. Returns
 // false if the solution is not finite.
 template <class T>
-bool partition_finish(std::ptrdiff_t s, std::ptrdiff_t e, const T* eliminated,
-                      const T* coupling_a, const T* coupling_c, Strided<T> x) {
+bool partition_finish(std::ptrdiff_t s, std::ptrdiff_t e, const T* eliminated, const T* coupling_a,
+                      const T* coupling_c, Strided<T> x) {
   const T first = eliminated[s], last = eliminated[e - 1];
   real_t<T> probe = 0;
   for (std::ptrdiff_t i = s; i < e; ++i) {

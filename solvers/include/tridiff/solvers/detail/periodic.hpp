@@ -36,8 +36,8 @@ std::ptrdiff_t periodic(std::ptrdiff_t n, Strided<const T> a, Strided<const T> b
       super[0] = c[0] + a[0];
       sub[1] = a[1] + c[1];
     }
-    return inner(n, Strided<const T>{sub, 1}, Strided<const T>{diag, 1},
-                 Strided<const T>{super, 1}, d, x, work);
+    return inner(n, Strided<const T>{sub, 1}, Strided<const T>{diag, 1}, Strided<const T>{super, 1},
+                 d, x, work);
   }
   const T corner_top = a[0];         // entry (0, n-1)
   const T corner_bottom = c[n - 1];  // entry (n-1, 0)

@@ -14,8 +14,8 @@ namespace tridiff::detail {
 // Solves one system; x may alias d (in place). a[0] and c[n-1] are never read.
 // `work` holds n scalars. Returns -1, or the row whose pivot vanished.
 template <class T>
-std::ptrdiff_t thomas(std::ptrdiff_t n, Strided<const T> a, Strided<const T> b,
-                      Strided<const T> c, Strided<const T> d, Strided<T> x, T* work) {
+std::ptrdiff_t thomas(std::ptrdiff_t n, Strided<const T> a, Strided<const T> b, Strided<const T> c,
+                      Strided<const T> d, Strided<T> x, T* work) {
   T pivot = b[0];
   if (vanishes(pivot, magnitude(b[0]))) return 0;
   // The previous row's values travel in registers, off the memory round trip.
