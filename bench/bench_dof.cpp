@@ -57,6 +57,7 @@
 #include "tridiff/dof/quality.hpp"
 #include "tridiff/dof/scenes.hpp"
 #include "tridiff/dof/tiles.hpp"
+#include "tridiff/image/copy.hpp"
 
 namespace {
 
@@ -68,16 +69,6 @@ constexpr std::ptrdiff_t kProbeSize = 256;   // the cost guard's probe (and twic
 constexpr double kMaxRunSeconds = 5;
 constexpr std::ptrdiff_t kFocusSize = 2048;
 constexpr int kFocusThreads = 2;
-
-void copy_image(Image& dst, const Image& src, int threads) {
-  const std::ptrdiff_t rows = src.height() * src.channels();
-#pragma omp parallel for num_threads(threads) schedule(static)
-  for (std::ptrdiff_t r = 0; r < rows; ++r) {
-    const int c = int(r / src.height());
-    const std::ptrdiff_t y = r % src.height();
-    std::memcpy(dst.plane(c).row(y), src.plane(c).row(y), src.width() * sizeof(float));
-  }
-}
 
 // A scene and its tile map, made once. `focus_percent` >= 0: focus_fraction_scene.
 struct CachedScene {

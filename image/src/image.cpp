@@ -1,5 +1,8 @@
-// Image storage: zeroed, aligned, and in huge pages when large.
+// Image storage: zeroed, aligned, and in huge pages when large; the parallel image copy.
 #include "tridiff/image/image.hpp"
+
+#include "tridiff/image/copy.hpp"
+#include "tridiff/threads.hpp"
 
 #include <sys/mman.h>
 
@@ -51,3 +54,21 @@ FloatStorage allocate_zeroed_floats(std::ptrdiff_t count) {
 }
 
 }  // namespace tridiff::detail
+
+namespace tridiff {
+
+void copy_image(Image& dst, const Image& src, int threads) {
+  const int team = resolve_threads(threads);
+  if (dst.width() != src.width() || dst.height() != src.height() ||
+      dst.channels() != src.channels())
+    throw InvalidArgument("dst", "shape differs from src");
+  const std::ptrdiff_t rows = src.height() * src.channels();
+#pragma omp parallel for num_threads(team) schedule(static)
+  for (std::ptrdiff_t r = 0; r < rows; ++r) {
+    const int c = static_cast<int>(r / src.height());
+    const std::ptrdiff_t y = r % src.height();
+    std::memcpy(dst.plane(c).row(y), src.plane(c).row(y), src.width() * sizeof(float));
+  }
+}
+
+}  // namespace tridiff
