@@ -519,6 +519,7 @@ TEST(DofMethods, InPlaceGivesTheSeparateOutput) {
   });
   for (const DofMethod& method : dof_methods())
     for (bool layers : {false, true}) {
+      if (layers && !method.honours_layers) continue;  // refused: DofOptionsHonoured
       DofOptions settings;
       settings.layers = layers;
       const Result separate = run(method, color, coc, settings);
@@ -585,6 +586,7 @@ TEST(DofMethods, EdgeSizesKeepRangeAndMass) {
   for (const auto& [width, height] : sizes)
     for (const DofMethod& method : diffusion_methods())
       for (const bool layers : {false, true}) {
+        if (layers && !method.honours_layers) continue;  // refused: DofOptionsHonoured
         SCOPED_TRACE(std::string(method.name) + " " + std::to_string(width) + " x " +
                      std::to_string(height) + (layers ? " layers" : ""));
         Case c;
@@ -817,6 +819,9 @@ TEST(DofLayers, NoNearFieldMeansNoLayering) {
   const Image far_coc =
       make_coc(kLayerSize, kLayerSize, [&](auto x, auto y) { return std::fabs(c.coc(x, y, 0)); });
   for (const DofMethod& method : dof_methods()) {
+    // Refused (DofOptionsHonoured); `auto` asked for layers chooses among the methods that have
+    // them, which may differ from its choice without.
+    if (!method.honours_layers || method.name == "auto") continue;
     DofOptions layered;
     layered.layers = true;
     const Result a = run(method, c.color, far_coc, layered), b = run(method, c.color, far_coc);
@@ -842,6 +847,7 @@ TEST(DofInput, NanColourNamesThePixel) {
   EXPECT_TRUE(contains(v.message, "channel 1"));
   for (const DofMethod& method : dof_methods())
     for (bool layers : {false, true}) {
+      if (layers && !method.honours_layers) continue;  // refused: DofOptionsHonoured
       DofOptions settings;
       settings.layers = layers;
       const Thrown t = invalid_argument_of([&] { run(method, color, coc, settings); });
@@ -857,6 +863,7 @@ TEST(DofInput, EveryMethodNamesANonFiniteColourAsTheColour) {
   color(17, 23, 1) = kNaN;
   for (const DofMethod& method : dof_methods())
     for (bool layers : {false, true}) {
+      if (layers && !method.honours_layers) continue;  // refused: DofOptionsHonoured
       DofOptions settings;
       settings.layers = layers;
       const Thrown t = invalid_argument_of([&] { run(method, color, coc, settings); });
@@ -1020,6 +1027,81 @@ TEST(ProceduralScene, DepthColourAndLensAreUsable) {
       "[ measured ] scene %tdx%td: depth [%.3f, %.3f] m, colour [%.3f, %.3f], %td HDR "
       "pixels, focus %.3f m; CoC near %td, far %td, sharp %td pixels\n",
       width, height, dmin, dmax, cmin, cmax, hdr, scene.lens.focus_distance_m, near, far, sharp);
+}
+
+// An option a method would ignore is refused, naming the option; the methods that honour it
+// accept it, and `auto` chooses among them.
+TEST(DofOptionsHonoured, EveryMethodHonoursOrRefuses) {
+  const Image color = random_image(24, 16, 3, 0.f, 1.f, 5);
+  const Image coc = make_coc(24, 16, [](auto x, auto) { return x < 12 ? -4.f : 6.f; });
+  DofOptions layered, bladed, boosted, gained;
+  layered.layers = true;
+  bladed.aperture.blades = 6;
+  boosted.highlight_threshold = 2.f;
+  gained.highlight_gain = 3.f;
+  const std::pair<const DofOptions*, const char*> asks[] = {{&layered, "layers"},
+                                                            {&bladed, "aperture_blades"},
+                                                            {&boosted, "highlight_threshold"},
+                                                            {&gained, "highlight_gain"}};
+  for (const DofMethod& method : dof_methods())
+    for (const auto& [options, option] : asks) {
+      SCOPED_TRACE(std::string(method.name) + " " + option);
+      if (honours_options(method, *options)) {
+        EXPECT_NO_THROW(run(method, color, coc, *options));
+      } else {
+        const Thrown t = invalid_argument_of([&] { run(method, color, coc, *options); });
+        EXPECT_EQ(t.argument, option);
+        EXPECT_TRUE(contains(t.message, std::string(method.name))) << t.message;
+      }
+    }
+  EXPECT_TRUE(find_dof_method("adi").honours_layers);
+  EXPECT_FALSE(find_dof_method("sat").honours_layers);
+}
+
+TEST(DofOptionsHonoured, BadLensCharacterIsRefusedNamingTheOption) {
+  const Image color = random_image(8, 8, 3, 0.f, 1.f, 5);
+  const Image coc = make_coc(8, 8, [](auto, auto) { return 3.f; });
+  const DofMethod& adi = find_dof_method("adi");
+  DofOptions options;
+  options.aperture.blades = 2;
+  EXPECT_EQ(invalid_argument_of([&] { run(adi, color, coc, options); }).argument,
+            "aperture_blades");
+  options.aperture = {.blades = 5, .rotation_deg = 0, .roundness = 1.5f};
+  EXPECT_EQ(invalid_argument_of([&] { run(adi, color, coc, options); }).argument,
+            "aperture_roundness");
+  options.aperture = {};
+  options.highlight_threshold = -1.f;
+  EXPECT_EQ(invalid_argument_of([&] { run(adi, color, coc, options); }).argument,
+            "highlight_threshold");
+  options.highlight_threshold = INFINITY;
+  options.highlight_gain = NAN;
+  EXPECT_EQ(invalid_argument_of([&] { run(adi, color, coc, options); }).argument, "highlight_gain");
+}
+
+// The polygon's rim: vertices on the unit circle, blade middles at cos(pi/N); its area is the
+// regular polygon's, N/2 sin(2 pi/N), counted on a fine grid.
+TEST(ApertureShape, PolygonRimAndArea) {
+  for (int blades : {3, 5, 6, 8}) {
+    const ApertureShape shape{.blades = blades, .rotation_deg = 10, .roundness = 0};
+    const float vertex = 10.f * float(M_PI) / 180.f;
+    EXPECT_NEAR(aperture_rim(shape, vertex), 1.f, 1e-5f) << blades;
+    EXPECT_NEAR(aperture_rim(shape, vertex + float(M_PI) / float(blades)),
+                std::cos(float(M_PI) / float(blades)), 1e-5f)
+        << blades;
+    const int n = 1000;
+    long count = 0;
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i)
+        count += inside(shape, (2.f * float(i) + 1.f) / float(n) - 1.f,
+                        (2.f * float(j) + 1.f) / float(n) - 1.f);
+    const double area = 4.0 * double(count) / (double(n) * n);
+    EXPECT_NEAR(area, 0.5 * blades * std::sin(2 * M_PI / blades), 2e-3) << blades;
+  }
+  const ApertureShape round{.blades = 6, .rotation_deg = 0, .roundness = 1};
+  EXPECT_TRUE(round.is_circle());
+  EXPECT_FLOAT_EQ(aperture_rim(round, 0.3f), 1.f);
+  EXPECT_TRUE(inside(ApertureShape{}, 0.7f, 0.7f));
+  EXPECT_FALSE(inside(ApertureShape{}, 0.72f, 0.72f));
 }
 
 }  // namespace

@@ -245,8 +245,11 @@ int list_methods() {
   std::printf("%-8s %-10s %-10s %-36s %s\n", "name", "near blur", "any size", "cost", "summary");
   for (const DofMethod& m : dof_methods())
     std::printf("%-8.*s %-10s %-10s %-36.*s %.*s\n", int(m.name.size()), m.name.data(),
-                m.blurs_foreground ? "yes" : "layers", m.unbounded_blur ? "yes" : "no",
-                int(m.cost.size()), m.cost.data(), int(m.summary.size()), m.summary.data());
+                m.blurs_foreground ? "yes"
+                : m.honours_layers ? "layers"
+                                   : "no",
+                m.unbounded_blur ? "yes" : "no", int(m.cost.size()), m.cost.data(),
+                int(m.summary.size()), m.summary.data());
   return 0;
 }
 

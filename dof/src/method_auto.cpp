@@ -175,13 +175,17 @@ MethodChoice choose_dof_method(const TileMap& tiles, const DofOptions& settings,
   std::vector<Candidate> candidates;
   std::string missing;
   for (const DofMethod& method : dof_methods()) {
-    if (method.name == "auto") continue;
+    if (method.name == "auto" || !honours_options(method, settings)) continue;
     const Candidate c = predict(method, table, tiles);
     if (c.method)
       candidates.push_back(c);
     else
       missing += (missing.empty() ? "" : ", ") + std::string(method.name);
   }
+  if (candidates.empty() && missing.empty())
+    throw InvalidArgument("method",
+                          "auto: no method honours the options asked for (layers, "
+                          "aperture shape, highlights) together");
   if (candidates.empty()) throw InvalidArgument("table", "has no row for any method");
   std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
     return a.predicted_seconds < b.predicted_seconds;

@@ -27,6 +27,7 @@ void run_gems(Image&, const DofFrame&, const DofOptions&, DofReport&);
 namespace {
 
 const DofMethod& registered_with(DofKernel kernel);
+void refuse_unhonoured(const DofMethod& method, const DofOptions& settings);
 
 // Every method runs through this. It refuses a CoC plane inside out (out is reallocated, or
 // written, while the CoC is still read), checks and analyses the frame once (DofFrame), and
@@ -39,6 +40,7 @@ DofReport checked(Image& out, const Image& color, ConstPlane coc, const DofOptio
     if (coc.data() >= begin && coc.data() < end)
       throw InvalidArgument("coc", "lies in the output image (give a separate plane)");
   }
+  refuse_unhonoured(registered_with(Kernel), settings);
   const DofFrame frame(color, coc, settings);
   DofReport report;
   // `auto` copies nothing itself: the method it chooses decides (run_on_frame).
@@ -65,7 +67,8 @@ constexpr std::array kMethods{
          .unbounded_blur = true,
          .cost = "O(pixels), independent of the CoC",
          .keeps_sharp = true,
-         .in_place = true}),
+         .in_place = true,
+         .honours_layers = true}),
     method<dof_detail::run_mpad>(
         {.name = "mpad",
          .summary = "multi-pass anisotropic diffusion, explicit steps (seed 000 §5.3.4)",
@@ -73,7 +76,8 @@ constexpr std::array kMethods{
          .unbounded_blur = false,
          .cost = "O(pixels x max CoC^2 / 8) steps",
          .keeps_sharp = true,
-         .in_place = false}),
+         .in_place = false,
+         .honours_layers = true}),
     method<dof_detail::run_ipf>(
         {.name = "ipf",
          .summary = "Inverse Post Filter scatter, depth test, 8-bit registers (seed 004 §5)",
@@ -137,12 +141,21 @@ constexpr std::array kMethods{
          .unbounded_blur = false,
          .cost = "the chosen method's",
          .keeps_sharp = false,
-         .in_place = false}),
+         .in_place = false,
+         // It chooses among the methods that honour what is asked (choose_dof_method).
+         .honours_layers = true}),
 };
 
 }  // namespace
 
 std::span<const DofMethod> dof_methods() { return kMethods; }
+
+bool honours_options(const DofMethod& method, const DofOptions& options) {
+  const bool shaped = options.aperture_image || !options.aperture.is_circle();
+  const bool highlights = std::isfinite(options.highlight_threshold) || options.highlight_gain != 1;
+  return (!options.layers || method.honours_layers) && (!shaped || method.shapes_bokeh) &&
+         (!highlights || method.boosts_highlights);
+}
 
 const DofMethod& find_dof_method(std::string_view name) {
   std::string known;
@@ -185,6 +198,42 @@ const DofMethod& registered_with(DofKernel kernel) {
   for (const DofMethod& method : kMethods)
     if (method.kernel == kernel) return method;
   throw std::logic_error("a DOF method kernel that is not registered");
+}
+
+// The registered names of the methods for which `honours` holds, comma-separated.
+template <class Honours>
+std::string methods_that(Honours honours) {
+  std::string names;
+  for (const DofMethod& method : kMethods)
+    if (honours(method)) names += (names.empty() ? "" : ", ") + std::string(method.name);
+  return names.empty() ? "none" : names;
+}
+
+// An option the method would ignore is refused, naming it and the methods that honour it.
+void refuse_unhonoured(const DofMethod& method, const DofOptions& settings) {
+  const auto refuse = [&](const char* option, const char* what, auto honours) {
+    throw InvalidArgument(option, "method '" + std::string(method.name) + "' has no " + what +
+                                      " (methods that do: " + methods_that(honours) + ")");
+  };
+  if (settings.layers && !method.honours_layers)
+    refuse("layers", "near-field layer", [](const DofMethod& m) { return m.honours_layers; });
+  validate(settings.aperture);
+  const auto shapes = [](const DofMethod& m) { return m.shapes_bokeh; };
+  if (settings.aperture_image && !method.shapes_bokeh)
+    refuse("aperture_image", "aperture shapes", shapes);
+  if (!settings.aperture.is_circle() && !method.shapes_bokeh)
+    refuse("aperture_blades", "aperture shapes", shapes);
+  if (!(settings.highlight_threshold > 0))
+    throw InvalidArgument("highlight_threshold", "must be > 0 (infinity: no highlights), got " +
+                                                     std::to_string(settings.highlight_threshold));
+  if (!(settings.highlight_gain >= 0) || !std::isfinite(settings.highlight_gain))
+    throw InvalidArgument("highlight_gain", "must be finite and >= 0, got " +
+                                                std::to_string(settings.highlight_gain));
+  const auto boosts = [](const DofMethod& m) { return m.boosts_highlights; };
+  if (std::isfinite(settings.highlight_threshold) && !method.boosts_highlights)
+    refuse("highlight_threshold", "highlight treatment", boosts);
+  if (settings.highlight_gain != 1 && !method.boosts_highlights)
+    refuse("highlight_gain", "highlight treatment", boosts);
 }
 
 // The largest |v| of a plane that require_finite has passed.

@@ -6,21 +6,35 @@
 #pragma once
 
 #include <functional>
+#include <limits>
+#include <memory>
 #include <span>
 #include <string>
 #include <string_view>
 #include <vector>
 
+#include "tridiff/dof/aperture.hpp"
 #include "tridiff/image/image.hpp"
 
 namespace tridiff {
 
 struct DofOptions {
-  int threads = 0;                       // 0: all cores
-  bool skip_in_focus = true;             // false: every pixel takes the full path (the reference)
-  bool layers = false;                   // blur the near field as its own layer (Kass et al. 2006)
-  float in_focus_coc_px = 1.f;           // |CoC| below this (a sub-pixel blur) counts as sharp
-  double error_budget_psnr = 30;         // `auto`: the least PSNR (dB) against scatter to accept
+  int threads = 0;                // 0: all cores
+  bool skip_in_focus = true;      // false: every pixel takes the full path (the reference)
+  bool layers = false;            // blur the near field as its own layer (Kass et al. 2006)
+  float in_focus_coc_px = 1.f;    // |CoC| below this (a sub-pixel blur) counts as sharp
+  double error_budget_psnr = 30;  // `auto`: the least PSNR (dB) against scatter to accept
+  // Lens character, for the methods that shape their bokeh (DofMethod::shapes_bokeh; the others
+  // refuse a shape other than the circle, or a kernel image, rather than ignore it).
+  ApertureShape aperture;
+  // A custom aperture (one channel, any size; overrides `aperture`): a point of light takes
+  // this picture, scaled to its CoC diameter. Empty: the shape above.
+  std::shared_ptr<const Image> aperture_image;
+  // Highlights, in linear light, for the methods that treat them (DofMethod::boosts_highlights):
+  // a pixel whose largest channel exceeds the threshold is a highlight; its excess over the
+  // threshold is multiplied by the gain. The default threshold (infinity) treats none.
+  float highlight_threshold = std::numeric_limits<float>::infinity();
+  float highlight_gain = 1.f;
   std::function<void(double)> progress;  // fraction done, 0..1; may be empty
 };
 
@@ -63,6 +77,11 @@ struct DofMethod {
   // Whether the method works where the image lies when out is color: the pixels it skips
   // (tiles in focus) then cost nothing at all. The others are given a copy of the colour.
   bool in_place = false;
+  // Which of DofOptions' optional treatments the method honours; the registry refuses the
+  // others (InvalidArgument naming the option) rather than ignore them silently.
+  bool honours_layers = false;     // DofOptions::layers
+  bool shapes_bokeh = false;       // DofOptions::aperture and aperture_image
+  bool boosts_highlights = false;  // DofOptions::highlight_threshold and highlight_gain
   DofKernel kernel = nullptr;
 };
 
@@ -71,6 +90,10 @@ inline DofReport depth_of_field(Image& out, const Image& color, ConstPlane coc,
                                 const DofMethod& method, const DofOptions& options = {}) {
   return method.run(out, color, coc, options);
 }
+
+// Whether `method` honours every optional treatment that `options` asks for (layers, an
+// aperture shape, highlights); `run` refuses the options it would ignore.
+bool honours_options(const DofMethod& method, const DofOptions& options);
 
 // Every registered method, in a fixed order.
 std::span<const DofMethod> dof_methods();

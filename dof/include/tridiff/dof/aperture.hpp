@@ -1,0 +1,28 @@
+// The shape of a lens's aperture: what a defocused point of light becomes (its bokeh). A
+// circle by default; a polygon of straight blades, rotated and rounded towards the circle, as
+// the iris of a real lens stopped down.
+#pragma once
+
+namespace tridiff {
+
+struct ApertureShape {
+  int blades = 0;           // 0: a circle; >= 3: a polygon of that many straight blades
+  float rotation_deg = 0;   // the polygon's rotation, degrees counter-clockwise
+  float roundness = 0;      // 0: straight blades; 1: a circle (the rim blends between the two)
+  bool is_circle() const { return blades == 0 || roundness >= 1; }
+};
+
+// Throws InvalidArgument naming the option ("aperture_blades", "aperture_roundness",
+// "aperture_rotation") for blades 1, 2 or < 0, roundness outside [0, 1], a rotation that is not
+// finite.
+void validate(const ApertureShape& shape);
+
+// The aperture's rim at polar angle `theta` (radians), as a fraction of the circumscribed unit
+// circle: 1 for a circle; cos(pi/N) / cos(phi) for an N-bladed polygon with a vertex on the
+// circle, phi the angle from the nearest blade's middle; blended linearly with 1 by roundness.
+float aperture_rim(const ApertureShape& shape, float theta);
+
+// Whether (u, v), in units of the circumscribed circle's radius, lies inside the aperture.
+bool inside(const ApertureShape& shape, float u, float v);
+
+}  // namespace tridiff

@@ -1,0 +1,40 @@
+// The aperture shapes of aperture.hpp.
+#include "tridiff/dof/aperture.hpp"
+
+#include <cmath>
+#include <numbers>
+#include <string>
+
+#include "tridiff/image/image.hpp"  // InvalidArgument
+
+namespace tridiff {
+
+void validate(const ApertureShape& shape) {
+  if (shape.blades < 0 || shape.blades == 1 || shape.blades == 2)
+    throw InvalidArgument("aperture_blades", "must be 0 (a circle) or at least 3, got " +
+                                                 std::to_string(shape.blades));
+  if (!(shape.roundness >= 0 && shape.roundness <= 1))
+    throw InvalidArgument("aperture_roundness",
+                          "must be in [0, 1], got " + std::to_string(shape.roundness));
+  if (!std::isfinite(shape.rotation_deg))
+    throw InvalidArgument("aperture_rotation", "must be finite");
+}
+
+float aperture_rim(const ApertureShape& shape, float theta) {
+  if (shape.is_circle()) return 1.f;
+  const float sector = 2 * std::numbers::pi_v<float> / float(shape.blades);
+  const float from_vertex = theta - shape.rotation_deg * (std::numbers::pi_v<float> / 180);
+  const float phi = from_vertex - sector * std::floor(from_vertex / sector) - 0.5f * sector;
+  const float polygon = std::cos(0.5f * sector) / std::cos(phi);
+  return shape.roundness + (1 - shape.roundness) * polygon;
+}
+
+bool inside(const ApertureShape& shape, float u, float v) {
+  const float r2 = u * u + v * v;
+  if (r2 > 1) return false;
+  if (shape.is_circle()) return true;
+  const float rim = aperture_rim(shape, std::atan2(v, u));
+  return r2 <= rim * rim;
+}
+
+}  // namespace tridiff
