@@ -1285,3 +1285,127 @@ TEST(Diffusion, AdiFromPixelsNamesBadConductanceAndBadPixel) {
 
 }  // namespace
 }  // namespace tridiff::test
+
+namespace tridiff::test {
+namespace {
+
+// The impulse response of one step over a uniform conductance beta = adi_beta_for_coc(d), on
+// a frame large enough that the border does not matter.
+Image impulse_response(float d, bool isotropic) {
+  const std::ptrdiff_t n = 8 * std::ptrdiff_t(d) + 1, c = n / 2;
+  Image image(n, n, 1), coc(n, n, 1);
+  for (std::ptrdiff_t y = 0; y < n; ++y)
+    for (std::ptrdiff_t x = 0; x < n; ++x) {
+      image(x, y, 0) = 0.f;
+      coc(x, y, 0) = d;
+    }
+  image(c, c, 0) = 1.f;
+  const auto to_link = [](float k) { return adi_beta_for_coc(k); };
+  if (isotropic)
+    diffuse_isotropic(image, image, coc.plane(0), to_link);
+  else
+    diffuse_adi(image, image, coc.plane(0), to_link);
+  return image;
+}
+
+// Where the profile from the centre along (dx, dy) falls to `level` of the peak, in pixels
+// (linear interpolation between samples).
+double extent(const Image& k, int dx, int dy, double level) {
+  const std::ptrdiff_t c = k.width() / 2;
+  const double peak = k(c, c, 0), step = std::hypot(dx, dy);
+  for (std::ptrdiff_t i = 1; c + i * std::max(dx, dy) < k.width(); ++i) {
+    const double here = k(c + i * dx, c + i * dy, 0),
+                 before = k(c + (i - 1) * dx, c + (i - 1) * dy, 0);
+    if (here < level * peak)
+      return step * (double(i - 1) + (before - level * peak) / (before - here));
+  }
+  return INFINITY;
+}
+
+TEST(IsotropicDiffusion, ImpulseIsRoundWhereAdiIsADiamond) {
+  for (float d : {12.f, 40.f}) {
+    const Image iso = impulse_response(d, true), adi = impulse_response(d, false);
+    for (double level : {0.5, 0.2, 0.05}) {
+      const double axis = extent(iso, 1, 0, level), diagonal = extent(iso, 1, 1, level);
+      EXPECT_NEAR(diagonal / axis, 1.0, 0.03) << "d " << d << " level " << level;
+      EXPECT_NEAR(extent(iso, 0, 1, level), axis, 1e-3 * axis);  // symmetric in x and y
+      // One ADI step: the diamond, diagonal extent about 1/sqrt(2) of the axis one.
+      EXPECT_LT(extent(adi, 1, 1, level) / extent(adi, 1, 0, level), 0.8);
+    }
+  }
+}
+
+// Against the thin-lens disc of diameter d: the same variance d^2 / 16 along each axis (by
+// construction of adi_beta_for_coc), the energy conserved, most of it inside the disc and
+// almost none beyond twice its radius.
+TEST(IsotropicDiffusion, ImpulseSpreadsLikeTheDisc) {
+  const float d = 24.f;
+  const Image k = impulse_response(d, true);
+  const std::ptrdiff_t c = k.width() / 2;
+  double sum = 0, xx = 0, yy = 0, inside = 0, beyond = 0;
+  for (std::ptrdiff_t y = 0; y < k.height(); ++y)
+    for (std::ptrdiff_t x = 0; x < k.width(); ++x) {
+      const double v = k(x, y, 0), r = std::hypot(double(x - c), double(y - c));
+      sum += v;
+      xx += v * double(x - c) * double(x - c);
+      yy += v * double(y - c) * double(y - c);
+      inside += r <= d / 2 ? v : 0;
+      beyond += r > d ? v : 0;
+    }
+  EXPECT_NEAR(sum, 1.0, 1e-5);
+  EXPECT_NEAR(xx, d * d / 16, 0.01 * d * d / 16);
+  EXPECT_NEAR(yy, d * d / 16, 0.01 * d * d / 16);
+  EXPECT_GT(inside, 0.75);  // a Gaussian of the same variance: 1 - e^-2 = 0.86
+  EXPECT_LT(beyond, 0.02);
+}
+
+// A sharp (zero-conductance) diagonal line one pixel wide insulates the two sides: the
+// diagonal links do not step over it.
+TEST(IsotropicDiffusion, ThinDiagonalLineInsulates) {
+  const std::ptrdiff_t n = 64;
+  Image image(n, n, 1), coc(n, n, 1);
+  for (std::ptrdiff_t y = 0; y < n; ++y)
+    for (std::ptrdiff_t x = 0; x < n; ++x) {
+      const bool line = x + y == n - 1;
+      image(x, y, 0) = x + y < n - 1 ? 1.f : 0.f;
+      coc(x, y, 0) = line ? 0.f : 20.f;
+    }
+  diffuse_isotropic(image, image, coc.plane(0),
+                    [](float k) { return k == 0 ? 0.f : adi_beta_for_coc(k); });
+  for (std::ptrdiff_t y = 0; y < n; ++y)
+    for (std::ptrdiff_t x = 0; x < n; ++x) {
+      if (x + y < n - 1) {
+        EXPECT_NEAR(image(x, y, 0), 1.f, 1e-6f) << x << " " << y;
+      } else if (x + y > n - 1) {
+        EXPECT_FLOAT_EQ(image(x, y, 0), 0.f) << x << " " << y;
+      }
+    }
+}
+
+// Skipping in-focus tiles changes no bit; the sum is conserved on a random frame.
+TEST(IsotropicDiffusion, SkipChangesNothingAndMassIsConserved) {
+  for (const Size size : kSizes) {
+    const std::ptrdiff_t w = size.width, h = size.height;
+    const Image color = random_image(size, 3, 4);
+    Image coc = random_image(size, 1, 5);  // CoC 0..15 px, a third of it in focus
+    const auto to_link = [](float u) { return u < 1.f / 3 ? 0.f : adi_beta_for_coc(15 * u); };
+    Image a, b;
+    DiffusionOptions full;
+    full.skip_inactive = false;
+    diffuse_isotropic(a, color, coc.plane(0), to_link);
+    diffuse_isotropic(b, color, coc.plane(0), to_link, full);
+    for (int c = 0; c < 3; ++c) {
+      double in = 0, out = 0;
+      for (std::ptrdiff_t y = 0; y < h; ++y)
+        for (std::ptrdiff_t x = 0; x < w; ++x) {
+          EXPECT_EQ(a(x, y, c), b(x, y, c));
+          in += color(x, y, c);
+          out += a(x, y, c);
+        }
+      EXPECT_NEAR(out, in, 1e-5 * in) << name(size);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace tridiff::test

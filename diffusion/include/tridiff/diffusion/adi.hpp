@@ -62,6 +62,19 @@ template <class ToLink>
 DiffusionReport diffuse_adi(Image& dst, const Image& src, ConstPlane value, ToLink to_link,
                             const DiffusionOptions& options = {});
 
+// One isotropic step: the ADI step above with half of each conductance, then the same
+// backward-Euler solve along the two diagonals (x - y and x + y constant) with a quarter. A
+// diagonal link spans sqrt(2) pixels, so the four passes spread a uniform region by the same
+// variance 2 beta along each axis as the ADI step, but where one ADI step's impulse response is
+// the product of two exponentials, a diamond (|x| + |y| constant), the four passes' is round:
+// its extent along the diagonals and along the axes agree within 1 % (tests/diffusion_test.cpp),
+// against a ratio of 0.71 for the ADI step. About twice the ADI step's work. A diagonal link
+// conducts the smallest conductance of the 2 x 2 pixels it crosses (detail/diagonal_impl.hpp).
+// The same stability, extrema and conservation as the ADI step; dst may be src.
+template <class ToLink>
+DiffusionReport diffuse_isotropic(Image& dst, const Image& src, ConstPlane value, ToLink to_link,
+                                  const DiffusionOptions& options = {});
+
 // The conductance beta that makes one ADI step spread a region of uniform circle of confusion
 // like the disc itself: a disc of diameter D has variance D^2/16 along each axis, one implicit
 // pass of conductance beta has variance 2 beta, so beta = D^2 / 32.

@@ -6,9 +6,9 @@
 namespace tridiff {
 
 struct ApertureShape {
-  int blades = 0;           // 0: a circle; >= 3: a polygon of that many straight blades
-  float rotation_deg = 0;   // the polygon's rotation, degrees counter-clockwise
-  float roundness = 0;      // 0: straight blades; 1: a circle (the rim blends between the two)
+  int blades = 0;          // 0: a circle; >= 3: a polygon of that many straight blades
+  float rotation_deg = 0;  // the polygon's rotation, degrees counter-clockwise
+  float roundness = 0;     // 0: straight blades; 1: a circle (the rim blends between the two)
   bool is_circle() const { return blades == 0 || roundness >= 1; }
 };
 

@@ -485,6 +485,12 @@ class PixelConductance {
     prefetch_span(value_.row(y) + x0, count);
   }
 
+  // Whether tile (tx, ty) holds a conductance other than zero.
+  bool conducting(std::ptrdiff_t tx, std::ptrdiff_t ty) const {
+    return conducting_[ty * tiles_x_ + tx] != 0;
+  }
+  const ToLink& to_link() const { return to_link_; }
+
   void column_links(std::ptrdiff_t y0, std::ptrdiff_t rows, std::ptrdiff_t x0, std::ptrdiff_t count,
                     std::ptrdiff_t lanes, float* out) const {
     // The conductances of rows [y0, y0 + rows] (the last one for the block's last link), as
@@ -565,7 +571,17 @@ class PixelConductance {
   std::vector<std::uint8_t> conducting_;  // per tile, row-major
 };
 
+// to_link scaled by a constant factor (the isotropic step's share of the conductance).
+template <class ToLink>
+struct ScaledLink {
+  ToLink to_link;
+  float scale;
+  float operator()(float value) const { return scale * to_link(value); }
+};
+
 }  // namespace tridiff::adi_detail
+
+#include "tridiff/diffusion/detail/diagonal_impl.hpp"
 
 namespace tridiff {
 
@@ -575,6 +591,31 @@ DiffusionReport diffuse_adi(Image& dst, const Image& src, ConstPlane value, ToLi
   adi_detail::require_same_size(src.width(), src.height(), value, "value");
   return adi_detail::run_adi(
       dst, src, adi_detail::PixelConductance<ToLink>(value, to_link, options.threads), options);
+}
+
+}  // namespace tridiff
+
+namespace tridiff {
+
+template <class ToLink>
+DiffusionReport diffuse_isotropic(Image& dst, const Image& src, ConstPlane value, ToLink to_link,
+                                  const DiffusionOptions& options) {
+  adi_detail::require_same_size(src.width(), src.height(), value, "value");
+  const adi_detail::ScaledLink<ToLink> half{to_link, 0.5f}, quarter{to_link, 0.25f};
+  const adi_detail::PixelConductance<adi_detail::ScaledLink<ToLink>> axes(value, half,
+                                                                          options.threads);
+  DiffusionOptions quiet = options;
+  quiet.progress = nullptr;
+  DiffusionReport report = adi_detail::run_adi(dst, src, axes, quiet);
+  if (options.progress) options.progress(0.5);
+  const auto conducting = [&](std::ptrdiff_t tx, std::ptrdiff_t ty) {
+    return axes.conducting(tx, ty);
+  };
+  for (const int slope : {+1, -1})
+    report += adi_detail::run_diagonal_pass(adi_detail::stack_of(dst), value, quarter, conducting,
+                                            slope, options);
+  if (options.progress) options.progress(1.0);
+  return report;
 }
 
 }  // namespace tridiff
