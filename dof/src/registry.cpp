@@ -22,6 +22,7 @@ void run_pyramid_layers(Image&, const DofFrame&, const DofOptions&, DofReport&);
 void run_sat(Image&, const DofFrame&, const DofOptions&, DofReport&);
 void run_sat_layers(Image&, const DofFrame&, const DofOptions&, DofReport&);
 void run_gems(Image&, const DofFrame&, const DofOptions&, DofReport&);
+void run_bokeh(Image&, const DofFrame&, const DofOptions&, DofReport&);
 }  // namespace dof_detail
 
 namespace {
@@ -93,7 +94,9 @@ constexpr std::array kMethods{
          .unbounded_blur = false,
          .cost = "O(pixels x CoC^2)",
          .keeps_sharp = true,
-         .in_place = false}),
+         .in_place = false,
+         .shapes_bokeh = true,
+         .boosts_highlights = true}),
     method<dof_detail::run_poisson>(
         {.name = "poisson",
          .summary = "Poisson-disc gather by the own CoC, blurred levels (seed 000 §5.3.3)",
@@ -134,6 +137,17 @@ constexpr std::array kMethods{
          .cost = "O(pixels x (1 + min(max |CoC|, 512) / 12))",
          .keeps_sharp = false,
          .in_place = false}),
+    method<dof_detail::run_bokeh>(
+        {.name = "bokeh",
+         .summary = "adi for the body, out-of-focus highlights as shaped sprites (issue 26)",
+         .blurs_foreground = false,
+         .unbounded_blur = false,
+         .cost = "O(pixels) + O(highlights x CoC^2)",
+         .keeps_sharp = true,
+         .in_place = false,
+         .honours_layers = true,
+         .shapes_bokeh = true,
+         .boosts_highlights = true}),
     method<dof_detail::run_auto>(
         {.name = "auto",
          .summary = "the cheapest method whose measured error meets --psnr-budget (auto.hpp)",
@@ -143,7 +157,9 @@ constexpr std::array kMethods{
          .keeps_sharp = false,
          .in_place = false,
          // It chooses among the methods that honour what is asked (choose_dof_method).
-         .honours_layers = true}),
+         .honours_layers = true,
+         .shapes_bokeh = true,
+         .boosts_highlights = true}),
 };
 
 }  // namespace
