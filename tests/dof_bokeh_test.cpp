@@ -273,7 +273,7 @@ TEST(DofBokeh, ThreadCountChangesNoBit) {
   one.threads = 1;
   two.threads = 2;
   EXPECT_EQ(testing_util::differing_bits(run("bokeh", f.color, f.coc, one),
-                                          run("bokeh", f.color, f.coc, two)),
+                                         run("bokeh", f.color, f.coc, two)),
             0);
 }
 

@@ -54,12 +54,9 @@ float ApertureFootprint::outer(double diameter) const {
 double ApertureFootprint::coverage(double diameter, float outer, std::ptrdiff_t dx,
                                    std::ptrdiff_t dy) const {
   switch (kind_) {
-    case Kind::circle:
-      return std::min(1.0, double(outer) - std::sqrt(double(dx * dx + dy * dy)));
-    case Kind::polygon:
-      return polygon_coverage(diameter, dx, dy);
-    case Kind::image:
-      return image_coverage(diameter, dx, dy);
+    case Kind::circle: return std::min(1.0, double(outer) - std::sqrt(double(dx * dx + dy * dy)));
+    case Kind::polygon: return polygon_coverage(diameter, dx, dy);
+    case Kind::image: return image_coverage(diameter, dx, dy);
   }
   return 0;
 }
@@ -98,12 +95,11 @@ double ApertureFootprint::image_coverage(double diameter, std::ptrdiff_t dx,
   const double scale = diameter / double(std::max(kernel_width_, kernel_height_));
   const double centre_u = 0.5 * double(kernel_width_), centre_v = 0.5 * double(kernel_height_);
   if (scale < 1)
-    return scale * scale * kernel_integral(centre_u + (double(dx) - 0.5) / scale,
-                                           centre_u + (double(dx) + 0.5) / scale,
-                                           centre_v + (double(dy) - 0.5) / scale,
-                                           centre_v + (double(dy) + 0.5) / scale);
-  return kernel_bilinear(centre_u + double(dx) / scale - 0.5,
-                         centre_v + double(dy) / scale - 0.5);
+    return scale * scale *
+           kernel_integral(
+               centre_u + (double(dx) - 0.5) / scale, centre_u + (double(dx) + 0.5) / scale,
+               centre_v + (double(dy) - 0.5) / scale, centre_v + (double(dy) + 0.5) / scale);
+  return kernel_bilinear(centre_u + double(dx) / scale - 0.5, centre_v + double(dy) / scale - 0.5);
 }
 
 // ∫∫ over [u0, u1] x [v0, v1] of the kernel, piecewise constant on its cells (zero outside).
@@ -120,7 +116,9 @@ double ApertureFootprint::sat_at(double u, double v) const {
   const std::ptrdiff_t j = std::min(static_cast<std::ptrdiff_t>(v), kernel_height_ - 1);
   const double fu = u - double(i), fv = v - double(j);
   const std::ptrdiff_t pitch = kernel_width_ + 1;
-  const auto at = [&](std::ptrdiff_t x, std::ptrdiff_t y) { return sat_[std::size_t(y * pitch + x)]; };
+  const auto at = [&](std::ptrdiff_t x, std::ptrdiff_t y) {
+    return sat_[std::size_t(y * pitch + x)];
+  };
   return (1 - fv) * ((1 - fu) * at(i, j) + fu * at(i + 1, j)) +
          fv * ((1 - fu) * at(i, j + 1) + fu * at(i + 1, j + 1));
 }

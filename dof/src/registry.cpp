@@ -166,6 +166,17 @@ constexpr std::array kMethods{
 
 std::span<const DofMethod> dof_methods() { return kMethods; }
 
+void validate_lens_character(const DofOptions& settings) {
+  validate(settings.aperture);
+  if (settings.aperture_image) validate_aperture_image(*settings.aperture_image);
+  if (!(settings.highlight_threshold > 0))
+    throw InvalidArgument("highlight_threshold", "must be > 0 (infinity: no highlights), got " +
+                                                     std::to_string(settings.highlight_threshold));
+  if (!(settings.highlight_gain >= 0) || !std::isfinite(settings.highlight_gain))
+    throw InvalidArgument("highlight_gain", "must be finite and >= 0, got " +
+                                                std::to_string(settings.highlight_gain));
+}
+
 bool honours_options(const DofMethod& method, const DofOptions& options) {
   const bool shaped = options.aperture_image || !options.aperture.is_circle();
   const bool highlights = std::isfinite(options.highlight_threshold) || options.highlight_gain != 1;
@@ -233,18 +244,12 @@ void refuse_unhonoured(const DofMethod& method, const DofOptions& settings) {
   };
   if (settings.layers && !method.honours_layers)
     refuse("layers", "near-field layer", [](const DofMethod& m) { return m.honours_layers; });
-  validate(settings.aperture);
+  validate_lens_character(settings);
   const auto shapes = [](const DofMethod& m) { return m.shapes_bokeh; };
   if (settings.aperture_image && !method.shapes_bokeh)
     refuse("aperture_image", "aperture shapes", shapes);
   if (!settings.aperture.is_circle() && !method.shapes_bokeh)
     refuse("aperture_blades", "aperture shapes", shapes);
-  if (!(settings.highlight_threshold > 0))
-    throw InvalidArgument("highlight_threshold", "must be > 0 (infinity: no highlights), got " +
-                                                     std::to_string(settings.highlight_threshold));
-  if (!(settings.highlight_gain >= 0) || !std::isfinite(settings.highlight_gain))
-    throw InvalidArgument("highlight_gain", "must be finite and >= 0, got " +
-                                                std::to_string(settings.highlight_gain));
   const auto boosts = [](const DofMethod& m) { return m.boosts_highlights; };
   if (std::isfinite(settings.highlight_threshold) && !method.boosts_highlights)
     refuse("highlight_threshold", "highlight treatment", boosts);
