@@ -557,6 +557,42 @@ options)
   refused "-o and --output" "--output" "twice" -- dof "${small[@]}" -o a.png --output b.png
   refused "ipf --mask twice" "--mask" "twice" -- ipf "${small[@]}" --mask 3 --mask 5
 
+  # Lens character (issue 26): ranges checked before any work, a kernel image read and checked
+  # before the frame, the option named; a method that cannot honour it refuses it by name.
+  refused "--aperture-blades 2" "--aperture-blades" "at least 3" -- \
+    dof "${small[@]}" --method scatter --aperture-blades 2
+  refused "--aperture-blades -4" "--aperture-blades" -- \
+    dof "${small[@]}" --method bokeh --aperture-blades -4
+  refused "--aperture-roundness 1.5" "--aperture-roundness" "[0, 1]" -- \
+    dof "${small[@]}" --method bokeh --aperture-roundness 1.5
+  refused "--highlight-threshold 0" "--highlight-threshold" "> 0" -- \
+    dof "${small[@]}" --method bokeh --highlight-threshold 0
+  refused "--highlight-gain -1" "--highlight-gain" ">= 0" -- \
+    dof "${small[@]}" --method scatter --highlight-gain -1
+  refused "adi --aperture-blades 6" "--aperture-blades" "bokeh" -- \
+    dof "${small[@]}" --method adi --aperture-blades 6
+  refused "sat --highlight-threshold 2" "--highlight-threshold" "scatter" -- \
+    dof "${small[@]}" --method sat --highlight-threshold 2
+  if command -v oiiotool >/dev/null; then
+    oiiotool --create 8x8 1 -d float -o "$work/dark_kernel.exr" &&
+      oiiotool --pattern constant:color=-1 8x8 1 -d float -o "$work/negative_kernel.exr" &&
+      oiiotool --pattern constant:color=1 8x8 1 -d float -o "$work/square_kernel.exr" ||
+      fail "oiiotool"
+    refused "an all-zero --aperture-image" "--aperture-image" "zero everywhere" -- \
+      dof "${small[@]}" --method bokeh --aperture-image "$work/dark_kernel.exr"
+    refused "a negative --aperture-image" "--aperture-image" ">= 0" -- \
+      dof "${small[@]}" --method scatter --aperture-image "$work/negative_kernel.exr"
+    refused "a missing --aperture-image" "nothing.exr" -- \
+      dof "${small[@]}" --method scatter --aperture-image "$work/nothing.exr"
+    refused "--aperture-image as the output" "--aperture-image" -- \
+      dof "${small[@]}" --method bokeh --aperture-image "$work/square_kernel.exr" \
+      -o "$work/square_kernel.exr"
+    run dof "${small[@]}" --method bokeh --aperture-image "$work/square_kernel.exr" \
+      --highlight-gain 2 -o "$work/kernel_bokeh.exr" --coc-output none
+    expect_status 0 "bokeh with a kernel image"
+    expect_file "$work/kernel_bokeh.exr" "bokeh with a kernel image"
+  fi
+
   # The built-in scene's size with files: the files have their own.
   if command -v oiiotool >/dev/null; then
     oiiotool --pattern constant:color=0.3,0.5,0.7 64x48 3 -d half -o "$work/color.exr" &&

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "common.hpp"
+#include "lens_character.hpp"
 #include "tridiff/dof/method.hpp"
 #include "tridiff/image/io.hpp"
 #include "tridiff/image/output_files.hpp"
@@ -61,6 +62,7 @@ void print_dof_usage() {
   std::fputs(kUsageHead, stdout);
   std::fputs(cli::kInputUsage, stdout);
   std::fputs(kDofUsage, stdout);
+  std::fputs(cli::kLensCharacterUsage, stdout);
   std::fputs(kOutputPolicy, stdout);
 }
 
@@ -156,6 +158,7 @@ DofPlan plan_dof(const cli::Arguments& args) {
   plan.coc_output = args.text("coc-output", default_coc_path(plan.output));
   if (plan.coc_output == "none") plan.coc_output.clear();
   cli::register_inputs(args, plan.files);
+  cli::plan_lens_character(args, plan.settings, plan.files);
   const auto claim_image = [&](const std::string& option, const std::string& path) {
     check_image_path(path);  // a format that can be written
     plan.files.claim(option, path);
@@ -176,6 +179,7 @@ int run_dof(const cli::Arguments& args) {
   const DofMethod& method = *plan.method;
   OutputFiles& outputs = plan.files;
 
+  cli::load_aperture_image(args, plan.settings, plan.threads);
   cli::Frame frame = cli::load_frame(args, plan.threads);
   const Image& color = frame.color;
   const Image& coc = frame.coc;
@@ -191,8 +195,10 @@ int run_dof(const cli::Arguments& args) {
   Image separate_result;
   Image& result = in_place ? frame.color : separate_result;
   const auto method_start = std::chrono::steady_clock::now();
-  cli::with_coc_named(
-      args, [&] { report = depth_of_field(result, color, coc.plane(0), method, settings); });
+  cli::with_coc_named(args, [&] {
+    cli::with_lens_character_named(
+        [&] { report = depth_of_field(result, color, coc.plane(0), method, settings); });
+  });
   const double method_seconds = seconds(method_start);
 
   const auto write_start = std::chrono::steady_clock::now();
@@ -257,6 +263,7 @@ int list_methods() {
 std::vector<std::string> dof_valued_options() {
   std::vector<std::string> valued = cli::kInputOptions;
   valued.insert(valued.end(), kDofOptions.begin(), kDofOptions.end());
+  valued.insert(valued.end(), cli::kLensCharacterOptions.begin(), cli::kLensCharacterOptions.end());
   return valued;
 }
 

@@ -20,6 +20,22 @@ void validate(const ApertureShape& shape) {
     throw InvalidArgument("aperture_rotation", "must be finite");
 }
 
+void validate_aperture_image(const Image& kernel) {
+  if (kernel.empty()) throw InvalidArgument("aperture_image", "is empty");
+  bool any_light = false;
+  const ConstPlane values = kernel.plane(0);
+  for (std::ptrdiff_t y = 0; y < values.height(); ++y)
+    for (std::ptrdiff_t x = 0; x < values.width(); ++x) {
+      const float v = values(x, y);
+      if (!std::isfinite(v) || v < 0)
+        throw InvalidArgument("aperture_image",
+                              "pixel (" + std::to_string(x) + ", " + std::to_string(y) + ") is " +
+                                  std::to_string(v) + "; expected a finite value >= 0");
+      any_light = any_light || v > 0;
+    }
+  if (!any_light) throw InvalidArgument("aperture_image", "is zero everywhere (no light passes)");
+}
+
 float aperture_rim(const ApertureShape& shape, float theta) {
   if (shape.is_circle()) return 1.f;
   const float sector = 2 * std::numbers::pi_v<float> / float(shape.blades);

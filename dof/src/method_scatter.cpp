@@ -44,6 +44,16 @@
 // every pixel receives its contributions in the same order (sources in raster order within a
 // layer), so the result does not depend on the number of threads.
 //
+// Lens character (issue 26). The disc above is the circular aperture; with DofOptions::aperture
+// (blades, rotation, roundness) or aperture_image each pixel's splat takes that footprint
+// instead (aperture_footprint.hpp: the polygon's anti-aliased rim is the same ramp on the signed
+// distance to the rim along the ray; a kernel image is box-filtered or bilinearly resampled to
+// the CoC diameter), area-normalised the same way; the circle keeps the code above, bit for bit.
+// Highlights (DofOptions::highlight_threshold, highlight_gain): an out-of-focus pixel whose
+// largest channel m exceeds the threshold t is scaled by (t + gain · (m - t)) / m before it is
+// splatted (HighlightBoost: the hue is kept). A sharp pixel is not boosted: it is not spread,
+// and the method keeps it bit for bit.
+//
 // Skipping (DofOptions::skip_in_focus): 32 x 32 tiles that no disc reaches (after the mirror
 // fold) hold only points, whose output is their input; they are copied and left out of the layer
 // passes. This changes no bit.
@@ -59,6 +69,7 @@
 #include "tridiff/dof/method.hpp"
 #include "tridiff/dof/tiles.hpp"
 #include "tridiff/threads.hpp"
+#include "aperture_footprint.hpp"
 #include "stage_clock.hpp"
 #include "frame.hpp"
 #include "tiled_gather.hpp"  // Stages
@@ -70,19 +81,13 @@
 namespace tridiff {
 namespace {
 
+using dof_detail::ApertureFootprint;
+using dof_detail::fold;
+using dof_detail::HighlightBoost;
 using dof_detail::Stages;
 
 constexpr std::ptrdiff_t kTile = 32;
 constexpr float kMaxDiameter = 16384.f;  // px
-
-// The mirror fold of coordinate x into [0, n): the frame continued as its mirror image.
-inline std::ptrdiff_t fold(std::ptrdiff_t x, std::ptrdiff_t n) {
-  if (x >= 0 && x < n) return x;
-  const std::ptrdiff_t period = 2 * n;
-  std::ptrdiff_t m = x % period;
-  if (m < 0) m += period;
-  return m < n ? m : period - 1 - m;
-}
 
 // A range [lo, hi] that contains fold(x) for every x in [a, b], where a < n and b >= 0.
 std::pair<std::ptrdiff_t, std::ptrdiff_t> folded_range(std::ptrdiff_t a, std::ptrdiff_t b,
@@ -132,6 +137,20 @@ Disc make_disc(float coc, FocusTest focus) {
   return disc;
 }
 
+// The same for a shaped aperture; a kernel image whose resampled weights vanish (a tiny CoC
+// falling between its bright cells) leaves a point.
+Disc make_shaped_disc(float coc, FocusTest focus, const ApertureFootprint& footprint) {
+  Disc disc;
+  const double diameter = std::fabs(double(coc));
+  if (focus.is_sharp(coc)) return disc;
+  const double sum = footprint.sum(diameter);
+  if (!(sum > 0)) return disc;
+  disc.outer = footprint.outer(diameter);
+  disc.reach = static_cast<std::int32_t>(dof_detail::footprint_reach(disc.outer));
+  disc.inv_sum = 1.0 / sum;
+  return disc;
+}
+
 // The depth layer of a signed CoC: floor(c), more negative = nearer.
 inline std::int32_t layer_key(float coc) {
   return static_cast<std::int32_t>(std::floor(std::clamp(double(coc), -1e9, 1e9)));
@@ -164,19 +183,22 @@ void refuse_what_takes_too_long(const DofFrame& frame) {
 }
 
 // 1. Every pixel's disc (its normaliser: a sum over the whole disc, computed once).
-std::vector<Disc> make_discs(const DofFrame& frame) {
+std::vector<Disc> make_discs(const DofFrame& frame, const ApertureFootprint& footprint) {
   const ConstPlane coc = frame.coc();
   const std::ptrdiff_t width = frame.width(), height = frame.height();
   const FocusTest focus = frame.focus();
   std::vector<Disc> discs(std::size_t(width * height));
 #pragma omp parallel for num_threads(frame.threads()) schedule(static)
   for (std::ptrdiff_t y = 0; y < height; ++y) {
+    const auto disc_of = [&](float c) {
+      return footprint.is_circle() ? make_disc(c, focus) : make_shaped_disc(c, focus, footprint);
+    };
     float last_coc = 0;
-    Disc last = make_disc(0.f, focus);
+    Disc last = disc_of(0.f);
     for (std::ptrdiff_t x = 0; x < width; ++x) {
       const float c = std::fabs(coc(x, y));
       if (c != last_coc) {
-        last = make_disc(c, focus);
+        last = disc_of(c);
         last_coc = c;
       }
       discs[std::size_t(y * width + x)] = last;
@@ -273,11 +295,24 @@ struct LayerSums {
   std::size_t at(std::ptrdiff_t x, std::ptrdiff_t y) const { return std::size_t(y * width + x); }
 };
 
+// The colour that pixel (x, y), out of focus, spreads: boosted when it is a highlight.
+void source_colour(const Image& color, std::ptrdiff_t x, std::ptrdiff_t y,
+                   const HighlightBoost& boost, std::vector<double>& lanes) {
+  const int channels = color.channels();
+  for (int c = 0; c < channels; ++c) lanes[std::size_t(c)] = double(color(x, y, c));
+  if (!boost.active()) return;
+  float largest = color(x, y, 0);
+  for (int c = 1; c < channels; ++c) largest = std::max(largest, color(x, y, c));
+  const double factor = boost.factor(largest);
+  for (int c = 0; c < channels; ++c) lanes[std::size_t(c)] *= factor;
+}
+
 // 4a. Splats the part of every disc of layer l that falls in rows [band0, band1); returns the
-// box of the pixels it touched.
+// box of the pixels it touched. `covers(diameter, outer, dx, dy)` is the footprint's coverage.
+template <class Covers>
 Box splat_band(const DofFrame& frame, const std::vector<Disc>& discs, const DepthLayers& layers,
                std::size_t l, std::ptrdiff_t band0, std::ptrdiff_t band1, LayerSums& sums,
-               std::vector<double>& lanes) {
+               std::vector<double>& lanes, const HighlightBoost& boost, Covers covers) {
   const Image& color = frame.color();
   const std::ptrdiff_t width = frame.width(), height = frame.height();
   const int channels = frame.channels();
@@ -303,7 +338,8 @@ Box splat_band(const DofFrame& frame, const std::vector<Disc>& discs, const Dept
     const std::ptrdiff_t reach = disc.reach;
     if (qy - reach >= 0 && qy + reach < height && (qy + reach < band0 || qy - reach >= band1))
       continue;  // no fold, and the disc's rows miss the band
-    for (int c = 0; c < channels; ++c) lanes[std::size_t(c)] = double(color(qx, qy, c));
+    source_colour(color, qx, qy, boost, lanes);
+    const double diameter = std::fabs(double(frame.coc()(qx, qy)));
     for (std::ptrdiff_t dy = -reach; dy <= reach; ++dy) {
       const std::ptrdiff_t ty = fold(qy + dy, height);
       if (ty < band0 || ty >= band1) continue;
@@ -313,7 +349,7 @@ Box splat_band(const DofFrame& frame, const std::vector<Disc>& discs, const Dept
       double* cover_row = cover + sums.at(0, ty);
       double* colour_row = sums.values.data() + sums.at(0, ty);
       for (std::ptrdiff_t dx = -hx; dx <= hx; ++dx) {
-        const double cov = coverage(disc.outer, dx, dy);
+        const double cov = covers(diameter, disc.outer, dx, dy);
         if (!(cov > 0)) continue;
         const double w = cov * disc.inv_sum;
         const std::ptrdiff_t tx = inside ? qx + dx : fold(qx + dx, width);
@@ -383,7 +419,9 @@ void run_scatter(Image& out, const DofFrame& frame, const DofOptions& settings, 
   const std::ptrdiff_t width = frame.width(), height = frame.height();
   const int channels = frame.channels();
   Stages stages(report);
-  const std::vector<Disc> discs = make_discs(frame);
+  const ApertureFootprint footprint(settings);
+  const HighlightBoost boost{settings.highlight_threshold, settings.highlight_gain};
+  const std::vector<Disc> discs = make_discs(frame, footprint);
   const WorkedTiles tiles = worked_tiles(frame, discs, settings.skip_in_focus);
   const DepthLayers layers = sort_into_layers(frame, tiles);
   stages.end("discs and layers");
@@ -404,7 +442,15 @@ void run_scatter(Image& out, const DofFrame& frame, const DofOptions& settings, 
     const std::ptrdiff_t band0 = height * thread / threads, band1 = height * (thread + 1) / threads;
     std::vector<double> lanes(static_cast<std::size_t>(channels));
     for (std::size_t l = 0; l < layers.count() && band0 < band1; ++l) {
-      const Box box = splat_band(frame, discs, layers, l, band0, band1, sums, lanes);
+      const Box box = footprint.is_circle()
+                          ? splat_band(frame, discs, layers, l, band0, band1, sums, lanes, boost,
+                                       [](double, float outer, std::ptrdiff_t dx,
+                                          std::ptrdiff_t dy) { return coverage(outer, dx, dy); })
+                          : splat_band(frame, discs, layers, l, band0, band1, sums, lanes, boost,
+                                       [&footprint](double diameter, float outer, std::ptrdiff_t dx,
+                                                    std::ptrdiff_t dy) {
+                                         return footprint.coverage(diameter, outer, dx, dy);
+                                       });
       composite_box(box, sums, out, trans);
       if (thread == 0 && settings.progress)
         settings.progress(0.99 * double(l + 1) / double(layers.count()));

@@ -22,6 +22,7 @@ void run_pyramid_layers(Image&, const DofFrame&, const DofOptions&, DofReport&);
 void run_sat(Image&, const DofFrame&, const DofOptions&, DofReport&);
 void run_sat_layers(Image&, const DofFrame&, const DofOptions&, DofReport&);
 void run_gems(Image&, const DofFrame&, const DofOptions&, DofReport&);
+void run_bokeh(Image&, const DofFrame&, const DofOptions&, DofReport&);
 }  // namespace dof_detail
 
 namespace {
@@ -93,7 +94,9 @@ constexpr std::array kMethods{
          .unbounded_blur = false,
          .cost = "O(pixels x CoC^2)",
          .keeps_sharp = true,
-         .in_place = false}),
+         .in_place = false,
+         .shapes_bokeh = true,
+         .boosts_highlights = true}),
     method<dof_detail::run_poisson>(
         {.name = "poisson",
          .summary = "Poisson-disc gather by the own CoC, blurred levels (seed 000 §5.3.3)",
@@ -134,6 +137,17 @@ constexpr std::array kMethods{
          .cost = "O(pixels x (1 + min(max |CoC|, 512) / 12))",
          .keeps_sharp = false,
          .in_place = false}),
+    method<dof_detail::run_bokeh>(
+        {.name = "bokeh",
+         .summary = "adi for the body, out-of-focus highlights as shaped sprites (issue 26)",
+         .blurs_foreground = false,
+         .unbounded_blur = false,
+         .cost = "O(pixels) + O(highlights x CoC^2)",
+         .keeps_sharp = true,
+         .in_place = false,
+         .honours_layers = true,
+         .shapes_bokeh = true,
+         .boosts_highlights = true}),
     method<dof_detail::run_auto>(
         {.name = "auto",
          .summary = "the cheapest method whose measured error meets --psnr-budget (auto.hpp)",
@@ -143,12 +157,25 @@ constexpr std::array kMethods{
          .keeps_sharp = false,
          .in_place = false,
          // It chooses among the methods that honour what is asked (choose_dof_method).
-         .honours_layers = true}),
+         .honours_layers = true,
+         .shapes_bokeh = true,
+         .boosts_highlights = true}),
 };
 
 }  // namespace
 
 std::span<const DofMethod> dof_methods() { return kMethods; }
+
+void validate_lens_character(const DofOptions& settings) {
+  validate(settings.aperture);
+  if (settings.aperture_image) validate_aperture_image(*settings.aperture_image);
+  if (!(settings.highlight_threshold > 0))
+    throw InvalidArgument("highlight_threshold", "must be > 0 (infinity: no highlights), got " +
+                                                     std::to_string(settings.highlight_threshold));
+  if (!(settings.highlight_gain >= 0) || !std::isfinite(settings.highlight_gain))
+    throw InvalidArgument("highlight_gain", "must be finite and >= 0, got " +
+                                                std::to_string(settings.highlight_gain));
+}
 
 bool honours_options(const DofMethod& method, const DofOptions& options) {
   const bool shaped = options.aperture_image || !options.aperture.is_circle();
@@ -217,18 +244,12 @@ void refuse_unhonoured(const DofMethod& method, const DofOptions& settings) {
   };
   if (settings.layers && !method.honours_layers)
     refuse("layers", "near-field layer", [](const DofMethod& m) { return m.honours_layers; });
-  validate(settings.aperture);
+  validate_lens_character(settings);
   const auto shapes = [](const DofMethod& m) { return m.shapes_bokeh; };
   if (settings.aperture_image && !method.shapes_bokeh)
     refuse("aperture_image", "aperture shapes", shapes);
   if (!settings.aperture.is_circle() && !method.shapes_bokeh)
     refuse("aperture_blades", "aperture shapes", shapes);
-  if (!(settings.highlight_threshold > 0))
-    throw InvalidArgument("highlight_threshold", "must be > 0 (infinity: no highlights), got " +
-                                                     std::to_string(settings.highlight_threshold));
-  if (!(settings.highlight_gain >= 0) || !std::isfinite(settings.highlight_gain))
-    throw InvalidArgument("highlight_gain", "must be finite and >= 0, got " +
-                                                std::to_string(settings.highlight_gain));
   const auto boosts = [](const DofMethod& m) { return m.boosts_highlights; };
   if (std::isfinite(settings.highlight_threshold) && !method.boosts_highlights)
     refuse("highlight_threshold", "highlight treatment", boosts);

@@ -5,6 +5,8 @@
 
 namespace tridiff {
 
+class Image;
+
 struct ApertureShape {
   int blades = 0;          // 0: a circle; >= 3: a polygon of that many straight blades
   float rotation_deg = 0;  // the polygon's rotation, degrees counter-clockwise
@@ -16,6 +18,11 @@ struct ApertureShape {
 // "aperture_rotation") for blades 1, 2 or < 0, roundness outside [0, 1], a rotation that is not
 // finite.
 void validate(const ApertureShape& shape);
+
+// A custom aperture (DofOptions::aperture_image, its first channel is read): InvalidArgument
+// naming "aperture_image" for an empty image, a value that is negative or not finite, or an
+// image that is zero everywhere (no light would pass).
+void validate_aperture_image(const Image& kernel);
 
 // The aperture's rim at polar angle `theta` (radians), as a fraction of the circumscribed unit
 // circle: 1 for a circle; cos(pi/N) / cos(phi) for an N-bladed polygon with a vertex on the

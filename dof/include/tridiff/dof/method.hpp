@@ -91,6 +91,11 @@ inline DofReport depth_of_field(Image& out, const Image& color, ConstPlane coc,
   return method.run(out, color, coc, options);
 }
 
+// Checks DofOptions' lens character before any work: the aperture (validate), the kernel image
+// (validate_aperture_image), highlight_threshold > 0 and highlight_gain finite and >= 0;
+// InvalidArgument naming the field. Every method's `run` checks it too.
+void validate_lens_character(const DofOptions& options);
+
 // Whether `method` honours every optional treatment that `options` asks for (layers, an
 // aperture shape, highlights); `run` refuses the options it would ignore.
 bool honours_options(const DofMethod& method, const DofOptions& options);

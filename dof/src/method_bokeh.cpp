@@ -1,0 +1,215 @@
+// The `bokeh` method (issue 26, lens character): the fast diffusion for the body of the frame,
+// and its out-of-focus highlights splatted as shaped sprites — the shaped bokeh of `scatter`
+// where it shows (on the bright points of light), at the cost of `adi` elsewhere.
+//
+// Highlights. The threshold t is DofOptions::highlight_threshold, or kAutoThreshold = 1 when it
+// is infinite (none asked for): brighter than a diffuse white in linear light, so only light
+// sources and their speculars. A highlight is a pixel that is out of focus (|CoC| >=
+// DofFrame::sharp_below) and whose largest channel m exceeds t. It is split in two:
+//  - the body keeps v · t / m (its largest channel clamped to t, the hue kept) and is blurred
+//    by `adi` (run_adi on the frame with the highlights clamped; layers pass through);
+//  - the sprite carries the rest, boosted by the gain g (HighlightBoost):
+//        excess = v · (t + g · (m - t)) / m - v · t / m = v · g · (m - t) / m,
+//    splatted with the aperture's footprint for its CoC (aperture_footprint.hpp, the same
+//    weights as scatter's splat: anti-aliased, area-normalised, mirror-folded at the border).
+// With g = 1 body + sprites carry exactly the input's energy (adi conserves it per row and
+// column, a sprite's weights sum to 1). A frame without highlights is adi's output bit for bit.
+//
+// Depth. A sprite lies behind nearer geometry: its weight at a covered pixel p is multiplied
+// by the visibility clamp(c_p - c_h + 2, 0, 1) of the signed CoCs (negative = near) of p and
+// of the highlight: 1 where p is not nearer than the highlight by more than 1 px of CoC (the
+// highlight's own surface, which may tilt, and everything behind it), 0 where it is nearer by
+// 2 px or more, a ramp between; and 0 for a far highlight (c_h > 0) on a pixel that is not far
+// (sharp or near: the focal plane hides the far field, and a sharp pixel stays bit for bit). The occluded part of a sprite is lost (hidden), not
+// renormalised. What this does not model: a near object's blurred halo, which extends beyond
+// its own pixels, does not dim a far sprite (adi does not spread it either without layers;
+// with layers the sprites are added over the near layer's halo). Sprites add to one another
+// (light is additive).
+//
+// Cost: O(pixels) for the body (adi's, skipping the tiles in focus) plus O(highlights x CoC^2)
+// for the sprites. Parallel: each thread owns a band of output rows and adds, in raster order of
+// the highlights, the part of every sprite that falls in it: the result does not depend on the
+// number of threads.
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "tridiff/dof/method.hpp"
+#include "aperture_footprint.hpp"
+#include "frame.hpp"
+#include "tiled_gather.hpp"  // Stages
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+namespace tridiff {
+namespace dof_detail {
+void run_adi(Image&, const DofFrame&, const DofOptions&, DofReport&);
+}  // namespace dof_detail
+
+namespace {
+
+using dof_detail::ApertureFootprint;
+using dof_detail::fold;
+using dof_detail::HighlightBoost;
+using dof_detail::Stages;
+
+constexpr float kAutoThreshold = 1.f;  // linear light: brighter than diffuse white
+
+struct Highlight {
+  std::int32_t x = 0, y = 0;
+  float coc = 0;           // signed, pixels
+  float outer = 0;         // the footprint's bound
+  double inv_sum = 0;      // 1 / the footprint's sum: 0 for a footprint without weight
+  std::size_t excess = 0;  // index of its channels in Sprites::excess
+};
+
+struct Sprites {
+  std::vector<Highlight> lights;  // raster order
+  std::vector<float> excess;      // channels per light
+};
+
+float largest_channel(const Image& color, std::ptrdiff_t x, std::ptrdiff_t y) {
+  float largest = color(x, y, 0);
+  for (int c = 1; c < color.channels(); ++c) largest = std::max(largest, color(x, y, c));
+  return largest;
+}
+
+// The out-of-focus highlights of the frame, in raster order, with their excess over the
+// threshold (boosted), and the footprint's normaliser for each.
+Sprites find_highlights(const DofFrame& frame, const HighlightBoost& boost,
+                        const ApertureFootprint& footprint) {
+  const Image& color = frame.color();
+  const ConstPlane coc = frame.coc();
+  const FocusTest focus = frame.focus();
+  std::vector<std::vector<std::int32_t>> row_hits(std::size_t(frame.height()));
+#pragma omp parallel for num_threads(frame.threads()) schedule(static)
+  for (std::ptrdiff_t y = 0; y < frame.height(); ++y)
+    for (std::ptrdiff_t x = 0; x < frame.width(); ++x)
+      if (!focus.is_sharp(coc(x, y)) && largest_channel(color, x, y) > boost.threshold)
+        row_hits[std::size_t(y)].push_back(std::int32_t(x));
+  Sprites sprites;
+  const int channels = frame.channels();
+  for (std::ptrdiff_t y = 0; y < frame.height(); ++y)
+    for (const std::int32_t x : row_hits[std::size_t(y)]) {
+      Highlight light{.x = x, .y = std::int32_t(y), .coc = coc(x, y)};
+      light.excess = sprites.excess.size();
+      const float m = largest_channel(color, x, y);
+      const float share = boost.gain * (m - boost.threshold) / m;
+      for (int c = 0; c < channels; ++c) sprites.excess.push_back(color(x, y, c) * share);
+      sprites.lights.push_back(light);
+    }
+  const std::ptrdiff_t count = std::ptrdiff_t(sprites.lights.size());
+#pragma omp parallel for num_threads(frame.threads()) schedule(dynamic, 4)
+  for (std::ptrdiff_t i = 0; i < count; ++i) {
+    Highlight& light = sprites.lights[std::size_t(i)];
+    const double diameter = std::fabs(double(light.coc));
+    light.outer = footprint.outer(diameter);
+    const double sum = footprint.sum(diameter);
+    light.inv_sum = sum > 0 ? 1.0 / sum : 0.0;
+  }
+  return sprites;
+}
+
+// The frame with every highlight's largest channel clamped to the threshold, hue kept.
+Image clamp_highlights(const DofFrame& frame, const Sprites& sprites, float threshold) {
+  Image body = frame.color();
+  for (const Highlight& light : sprites.lights) {
+    const float scale = threshold / largest_channel(body, light.x, light.y);
+    for (int c = 0; c < body.channels(); ++c) body(light.x, light.y, c) *= scale;
+  }
+  return body;
+}
+
+// How much of a sprite of signed CoC `light_coc` shows at a pixel of signed CoC `coc`.
+inline float visibility(float coc, float light_coc, FocusTest focus) {
+  if (light_coc > 0 && !focus.is_far(coc)) return 0.f;
+  return std::clamp(coc - light_coc + 2.f, 0.f, 1.f);
+}
+
+// Adds the part of every sprite that falls in rows [band0, band1) to out.
+void splat_band(const DofFrame& frame, const Sprites& sprites, const ApertureFootprint& footprint,
+                std::ptrdiff_t band0, std::ptrdiff_t band1, Image& out) {
+  const ConstPlane coc = frame.coc();
+  const std::ptrdiff_t width = frame.width(), height = frame.height();
+  const int channels = frame.channels();
+  const FocusTest focus = frame.focus();
+  for (const Highlight& light : sprites.lights) {
+    if (light.inv_sum == 0) continue;
+    const std::ptrdiff_t reach = dof_detail::footprint_reach(light.outer);
+    const std::ptrdiff_t qx = light.x, qy = light.y;
+    if (qy - reach >= 0 && qy + reach < height && (qy + reach < band0 || qy - reach >= band1))
+      continue;  // no fold, and the sprite's rows miss the band
+    const double diameter = std::fabs(double(light.coc));
+    const float* excess = sprites.excess.data() + light.excess;
+    for (std::ptrdiff_t dy = -reach; dy <= reach; ++dy) {
+      const std::ptrdiff_t ty = fold(qy + dy, height);
+      if (ty < band0 || ty >= band1) continue;
+      const std::ptrdiff_t hx = dof_detail::footprint_row_half_width(light.outer, dy);
+      for (std::ptrdiff_t dx = -hx; dx <= hx; ++dx) {
+        const double cover = footprint.coverage(diameter, light.outer, dx, dy);
+        if (!(cover > 0)) continue;
+        const std::ptrdiff_t tx = fold(qx + dx, width);
+        const float seen = visibility(coc(tx, ty), light.coc, focus);
+        if (seen == 0) continue;
+        const double weight = cover * light.inv_sum * double(seen);
+        for (int c = 0; c < channels; ++c)
+          out(tx, ty, c) += static_cast<float>(weight * double(excess[c]));
+      }
+    }
+  }
+}
+
+void splat_sprites(const DofFrame& frame, const Sprites& sprites,
+                   const ApertureFootprint& footprint, Image& out) {
+  const std::ptrdiff_t height = frame.height();
+#pragma omp parallel num_threads(frame.threads())
+  {
+#ifdef _OPENMP
+    const int thread = omp_get_thread_num(), threads = omp_get_num_threads();
+#else
+    const int thread = 0, threads = 1;
+#endif
+    const std::ptrdiff_t band0 = height * thread / threads, band1 = height * (thread + 1) / threads;
+    if (band0 < band1) splat_band(frame, sprites, footprint, band0, band1, out);
+  }
+}
+
+}  // namespace
+
+namespace dof_detail {
+
+void run_bokeh(Image& out, const DofFrame& frame, const DofOptions& settings, DofReport& report) {
+  Stages stages(report);
+  const ApertureFootprint footprint(settings);
+  const bool automatic = !std::isfinite(settings.highlight_threshold);
+  const HighlightBoost boost{automatic ? kAutoThreshold : settings.highlight_threshold,
+                             settings.highlight_gain};
+  const Sprites sprites = find_highlights(frame, boost, footprint);
+  stages.end("highlights");
+
+  DofReport body_report;
+  if (sprites.lights.empty()) {
+    run_adi(out, frame, settings, body_report);
+  } else {
+    Image body = clamp_highlights(frame, sprites, boost.threshold);
+    run_adi(body, DofFrame(frame, body), settings, body_report);  // adi works in place
+    out = std::move(body);
+  }
+  report.skipped_fraction = body_report.skipped_fraction;
+  report.layered = body_report.layered;
+  stages.end("body");
+
+  splat_sprites(frame, sprites, footprint, out);
+  stages.end("sprites");
+  report.notes = std::to_string(sprites.lights.size()) + " out-of-focus highlights above " +
+                 std::to_string(boost.threshold) + (automatic ? " (automatic)" : "") +
+                 " splatted as sprites";
+  if (settings.progress) settings.progress(1.0);
+}
+
+}  // namespace dof_detail
+}  // namespace tridiff

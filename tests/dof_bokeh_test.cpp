@@ -1,0 +1,300 @@
+// Lens character (issue 26): the scatter reference's shaped bokeh and highlight boost, and the
+// `bokeh` method (adi body + highlight sprites). Shapes are checked against the aperture's own
+// inside() test and the polygon's area formula; energies against the input's, by hand.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+#include <numbers>
+
+#include "test_util.hpp"
+#include "tridiff/dof/method.hpp"
+
+namespace tridiff {
+namespace {
+
+using testing_util::make_coc;
+using testing_util::random_image;
+
+constexpr std::ptrdiff_t kSize = 81, kCentre = 40;
+constexpr float kPoint = 1000.f;
+
+Image filled(std::ptrdiff_t width, std::ptrdiff_t height, int channels, float value) {
+  return testing_util::make_image(width, height, channels, [=](auto, auto, int) { return value; });
+}
+
+Image run(std::string_view method, const Image& color, const Image& coc,
+          const DofOptions& settings = {}) {
+  Image out;
+  depth_of_field(out, color, coc.plane(0), find_dof_method(method), settings);
+  return out;
+}
+
+// A black frame, one bright pixel at (x, y) in every channel, a uniform CoC.
+struct Point {
+  Image color, coc;
+};
+Point bright_point(float coc_px, std::ptrdiff_t x = kCentre, std::ptrdiff_t y = kCentre) {
+  Point p{filled(kSize, kSize, 3, 0.f), make_coc(kSize, kSize, [=](auto, auto) { return coc_px; })};
+  for (int c = 0; c < 3; ++c) p.color(x, y, c) = kPoint;
+  return p;
+}
+
+double channel_sum(const Image& image, int c) {
+  double sum = 0;
+  for (std::ptrdiff_t y = 0; y < image.height(); ++y)
+    for (std::ptrdiff_t x = 0; x < image.width(); ++x) sum += image(x, y, c);
+  return sum;
+}
+
+DofOptions bladed(int blades, float rotation_deg = 0) {
+  DofOptions settings;
+  settings.aperture = {.blades = blades, .rotation_deg = rotation_deg, .roundness = 0};
+  return settings;
+}
+
+// Whether offset (dx, dy) (y down) lies in the aperture scaled to circumradius `radius`.
+bool in_shape(const ApertureShape& shape, double radius, std::ptrdiff_t dx, std::ptrdiff_t dy) {
+  return inside(shape, float(double(dx) / radius), float(-double(dy) / radius));
+}
+
+// CoC 31 px and 6 blades: the splat is the hexagon of circumradius 15.5 — nonzero a pixel
+// inside its rim, zero a pixel outside, its area (energy / plateau) the hexagon's
+// 3 sqrt(3) / 2 r^2 = 624.2 px^2.
+TEST(ApertureScatter, SixBladesSplatTheHexagon) {
+  const Point p = bright_point(31.f);
+  const DofOptions settings = bladed(6);
+  const Image out = run("scatter", p.color, p.coc, settings);
+  const double radius = 15.5;
+  std::ptrdiff_t inside_checked = 0, outside_checked = 0;
+  for (std::ptrdiff_t dy = -kCentre; dy <= kCentre; ++dy)
+    for (std::ptrdiff_t dx = -kCentre; dx <= kCentre; ++dx) {
+      const float v = out(kCentre + dx, kCentre + dy, 0);
+      if (in_shape(settings.aperture, radius - 1, dx, dy)) {
+        EXPECT_GT(v, 0.f) << dx << ", " << dy;
+        ++inside_checked;
+      } else if (!in_shape(settings.aperture, radius + 1, dx, dy)) {
+        EXPECT_EQ(v, 0.f) << dx << ", " << dy;
+        ++outside_checked;
+      }
+    }
+  EXPECT_GT(inside_checked, 500);
+  EXPECT_GT(outside_checked, 5000);
+  const double area = kPoint / double(out(kCentre, kCentre, 0));
+  const double hexagon = 1.5 * std::sqrt(3.0) * radius * radius;
+  EXPECT_NEAR(area / hexagon, 1.0, 0.03) << area;
+}
+
+// A shaped splat conserves the point's energy. At the frame's border the folded splats of a
+// uniform CoC tile the frame only for a shape symmetric under the axis reflections (the hexagon
+// with a vertex on the x axis): scatter's layer normalisation rescales the others there.
+TEST(ApertureScatter, ShapedSplatConservesEnergy) {
+  const Point p = bright_point(31.f);
+  for (int blades : {3, 5, 6, 8}) {
+    const Image out = run("scatter", p.color, p.coc, bladed(blades, 17));
+    EXPECT_NEAR(channel_sum(out, 1), kPoint, 1e-5 * kPoint) << blades;
+  }
+  const Point corner = bright_point(31.f, 3, 5);
+  const Image out = run("scatter", corner.color, corner.coc, bladed(6, 0));
+  EXPECT_NEAR(channel_sum(out, 1), kPoint, 1e-5 * kPoint);
+}
+
+// Rotating the aperture by 90 degrees counter-clockwise rotates the splat so on the screen:
+// offset (dx, dy) (y down) moves to (dy, -dx).
+TEST(ApertureScatter, RotationRotatesTheSplat) {
+  const Point p = bright_point(31.f);
+  const Image upright = run("scatter", p.color, p.coc, bladed(5, 0));
+  const Image turned = run("scatter", p.color, p.coc, bladed(5, 90));
+  float largest = 0, worst = 0;
+  for (std::ptrdiff_t dy = -20; dy <= 20; ++dy)
+    for (std::ptrdiff_t dx = -20; dx <= 20; ++dx) {
+      const float a = upright(kCentre + dx, kCentre + dy, 0);
+      largest = std::max(largest, a);
+      worst = std::max(worst, std::fabs(a - turned(kCentre + dy, kCentre - dx, 0)));
+    }
+  EXPECT_LT(worst, 1e-5f * largest);
+  // A vertex of the 90-degree pentagon points up (to smaller rows), a blade faces down.
+  EXPECT_GT(turned(kCentre, kCentre - 14, 0), 0.f);
+  EXPECT_EQ(turned(kCentre, kCentre + 14, 0), 0.f);
+}
+
+// Four blades at 45 degrees are the axis-aligned square (corners at (±11, ±11) of the
+// circumradius 15.5); at 0 degrees the diamond, which misses those corners.
+TEST(ApertureScatter, FourBladesAt45DegreesAreTheUprightSquare) {
+  const Point p = bright_point(31.f);
+  const Image square = run("scatter", p.color, p.coc, bladed(4, 45));
+  const Image diamond = run("scatter", p.color, p.coc, bladed(4, 0));
+  for (const std::ptrdiff_t sx : {-10, 10})
+    for (const std::ptrdiff_t sy : {-10, 10}) {
+      EXPECT_GT(square(kCentre + sx, kCentre + sy, 0), 0.f);
+      EXPECT_EQ(diamond(kCentre + sx, kCentre + sy, 0), 0.f);
+    }
+  EXPECT_EQ(square(kCentre + 14, kCentre, 0), 0.f);
+  EXPECT_GT(diamond(kCentre + 14, kCentre, 0), 0.f);
+}
+
+// A ring kernel image: 1 for 10 <= r <= 14 (r from the centre of a 31 x 31 image).
+Image ring(std::ptrdiff_t size, double inner, double outer) {
+  Image kernel(size, size, 1);
+  const double centre = 0.5 * double(size - 1);
+  for (std::ptrdiff_t y = 0; y < size; ++y)
+    for (std::ptrdiff_t x = 0; x < size; ++x) {
+      const double r = std::hypot(double(x) - centre, double(y) - centre);
+      kernel(x, y, 0) = r >= inner && r <= outer ? 1.f : 0.f;
+    }
+  return kernel;
+}
+
+// At CoC 31 a 31 x 31 kernel maps pixel to pixel: the splat is the kernel over its sum.
+TEST(ApertureScatter, KernelImageIsReproducedAtItsOwnSize) {
+  const Point p = bright_point(31.f);
+  const Image kernel = ring(31, 10, 14);
+  DofOptions settings;
+  settings.aperture_image = std::make_shared<const Image>(kernel);
+  const Image out = run("scatter", p.color, p.coc, settings);
+  const double kernel_sum = channel_sum(kernel, 0);
+  for (std::ptrdiff_t y = 0; y < 31; ++y)
+    for (std::ptrdiff_t x = 0; x < 31; ++x)
+      ASSERT_NEAR(out(kCentre - 15 + x, kCentre - 15 + y, 2), kPoint * kernel(x, y, 0) / kernel_sum,
+                  1e-6 * kPoint)
+          << x << ", " << y;
+  EXPECT_NEAR(channel_sum(out, 2), kPoint, 1e-5 * kPoint);
+}
+
+// Shrunk by 2 (a 62 x 62 ring at CoC 31), every output pixel is the mean of a 2 x 2 block.
+TEST(ApertureScatter, KernelImageShrinksByBoxFilter) {
+  const Point p = bright_point(31.f);
+  const Image kernel = ring(62, 20, 28);
+  DofOptions settings;
+  settings.aperture_image = std::make_shared<const Image>(kernel);
+  const Image out = run("scatter", p.color, p.coc, settings);
+  const double kernel_sum = channel_sum(kernel, 0);
+  for (std::ptrdiff_t y = 0; y < 31; ++y)
+    for (std::ptrdiff_t x = 0; x < 31; ++x) {
+      const double block = kernel(2 * x, 2 * y, 0) + kernel(2 * x + 1, 2 * y, 0) +
+                           kernel(2 * x, 2 * y + 1, 0) + kernel(2 * x + 1, 2 * y + 1, 0);
+      ASSERT_NEAR(out(kCentre - 15 + x, kCentre - 15 + y, 0), kPoint * block / kernel_sum,
+                  1e-6 * kPoint)
+          << x << ", " << y;
+    }
+}
+
+TEST(ApertureScatter, BadKernelImageIsRefusedNamingIt) {
+  const Point p = bright_point(9.f);
+  Image negative = ring(9, 2, 3), not_finite = ring(9, 2, 3), dark = filled(9, 9, 1, 0.f);
+  negative(4, 4, 0) = -1.f;
+  not_finite(1, 2, 0) = NAN;
+  for (const Image* kernel : {&negative, &not_finite, &dark}) {
+    DofOptions settings;
+    settings.aperture_image = std::make_shared<const Image>(*kernel);
+    for (const char* method : {"scatter", "bokeh"}) {
+      try {
+        run(method, p.color, p.coc, settings);
+        ADD_FAILURE() << method << ": not refused";
+      } catch (const InvalidArgument& e) {
+        EXPECT_EQ(e.argument(), "aperture_image") << method;
+      }
+    }
+  }
+}
+
+// Highlight boost, by hand: (4, 2, 1) over threshold 1 with gain 3 is scaled by
+// (1 + 3 (4 - 1)) / 4 = 2.5, so the splat carries (10, 5, 2.5); the circle as well.
+TEST(ApertureScatter, HighlightBoostScalesTheExcessKeepingHue) {
+  Point p = bright_point(15.f);
+  p.color(kCentre, kCentre, 0) = 4.f;
+  p.color(kCentre, kCentre, 1) = 2.f;
+  p.color(kCentre, kCentre, 2) = 1.f;
+  DofOptions settings;
+  settings.highlight_threshold = 1.f;
+  settings.highlight_gain = 3.f;
+  const Image out = run("scatter", p.color, p.coc, settings);
+  EXPECT_NEAR(channel_sum(out, 0), 10.0, 1e-5);
+  EXPECT_NEAR(channel_sum(out, 1), 5.0, 1e-5);
+  EXPECT_NEAR(channel_sum(out, 2), 2.5, 1e-5);
+}
+
+// A dark frame with three bright points at CoC 20 px and six blades: `bokeh` makes the same
+// hexagons as scatter and keeps every channel's energy.
+struct Lamps {
+  Image color, coc;
+};
+Lamps dark_frame_with_lamps() {
+  Lamps f{filled(96, 96, 3, 0.01f), make_coc(96, 96, [](auto, auto) { return 20.f; })};
+  f.color(20, 24, 0) = 200.f;
+  f.color(60, 30, 1) = 120.f;
+  f.color(40, 70, 2) = 300.f;
+  f.color(40, 70, 0) = 50.f;
+  return f;
+}
+
+TEST(DofBokeh, SpritesKeepEnergyAndMatchScatter) {
+  const Lamps f = dark_frame_with_lamps();
+  const DofOptions settings = bladed(6, 10);
+  const Image bokeh = run("bokeh", f.color, f.coc, settings);
+  const Image scatter = run("scatter", f.color, f.coc, settings);
+  double peak = 0, worst = 0, squared = 0;
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_NEAR(channel_sum(bokeh, c) / channel_sum(f.color, c), 1.0, 1e-3) << c;
+    for (std::ptrdiff_t y = 0; y < 96; ++y)
+      for (std::ptrdiff_t x = 0; x < 96; ++x) {
+        peak = std::max(peak, double(scatter(x, y, c)));
+        const double e = double(bokeh(x, y, c)) - double(scatter(x, y, c));
+        worst = std::max(worst, std::fabs(e));
+        squared += e * e;
+      }
+  }
+  const double psnr = 10 * std::log10(peak * peak / (squared / (3 * 96 * 96)));
+  std::printf("[ measured ] bokeh vs scatter, three lamps: max %.4g of peak %.4g, PSNR %.1f dB\n",
+              worst, peak, psnr);
+  EXPECT_LT(worst, 0.02 * peak);
+  EXPECT_GT(psnr, 45.0);
+}
+
+// Below the threshold everywhere (values in [0, 1), the automatic threshold 1): adi's output.
+TEST(DofBokeh, WithoutHighlightsItIsAdiBitForBit) {
+  const Image color = random_image(70, 50, 3, 0.f, 1.f, 7);
+  const Image coc = make_coc(70, 50, [](auto x, auto y) { return float((x + y) % 23) - 9.f; });
+  for (bool layers : {false, true}) {
+    DofOptions settings;
+    settings.layers = layers;
+    const Image adi = run("adi", color, coc, settings);
+    DofOptions shaped = settings;
+    shaped.aperture.blades = 7;
+    const Image bokeh = run("bokeh", color, coc, shaped);
+    EXPECT_EQ(testing_util::differing_bits(adi, bokeh), 0) << layers;
+  }
+}
+
+// Each thread adds its own rows, highlights in raster order: the thread count changes no bit.
+TEST(DofBokeh, ThreadCountChangesNoBit) {
+  const Lamps f = dark_frame_with_lamps();
+  DofOptions one = bladed(6), two = bladed(6);
+  one.threads = 1;
+  two.threads = 2;
+  EXPECT_EQ(testing_util::differing_bits(run("bokeh", f.color, f.coc, one),
+                                         run("bokeh", f.color, f.coc, two)),
+            0);
+}
+
+// A near object (CoC -12) over the right part of a far lamp's sprite (CoC +20) hides that part;
+// the left part is as without it.
+TEST(DofBokeh, NearObjectOccludesTheSprite) {
+  Lamps f{filled(96, 96, 3, 0.f), make_coc(96, 96, [](auto, auto) { return 20.f; })};
+  f.color(44, 48, 0) = f.color(44, 48, 1) = f.color(44, 48, 2) = 1000.f;
+  const Image coc_near = make_coc(96, 96, [](auto x, auto) { return x >= 48 ? -12.f : 20.f; });
+  const Image open = run("bokeh", f.color, f.coc, bladed(6));
+  const Image hidden = run("bokeh", f.color, coc_near, bladed(6));
+  double open_left = 0, hidden_left = 0, open_right = 0, hidden_right = 0;
+  for (std::ptrdiff_t y = 0; y < 96; ++y)
+    for (std::ptrdiff_t x = 0; x < 96; ++x) {
+      (x < 48 ? open_left : open_right) += open(x, y, 1);
+      (x < 48 ? hidden_left : hidden_right) += hidden(x, y, 1);
+    }
+  EXPECT_GT(open_right, 250.0);  // the hexagon's part right of x = 47.5 (about 40 %)
+  EXPECT_LT(hidden_right, 0.01 * open_right);
+  EXPECT_NEAR(hidden_left / open_left, 1.0, 0.01);
+}
+
+}  // namespace
+}  // namespace tridiff
