@@ -68,7 +68,8 @@ const char* const kInputUsage = R"(input
   --width W, --height H     size of the built-in scene (default 1920 x 1080; not with --color)
   --max-pixels N            larger input images are refused before they are read
                             (default 268435456, 16384 x 16384)
-lens (thin lens, seed 000 eq. 3.2)
+lens (thin lens, seed 000 eq. 3.2; with --color the summary names the values left at
+      these defaults, which are not your camera's)
   --focus M                 focus distance, metres (default 3.2; built-in scene: 3.95, its sphere)
   --focus-at X,Y            focus at the depth of pixel (X, Y) (0,0 top left): the median of
                             the valid depths in the 5 x 5 pixels around it, so that a pixel
