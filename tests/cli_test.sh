@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Tests of the `tridiff` command line, run by CTest:
 #   cli_test.sh TRIDIFF_BINARY WORK_DIR CASE
-# CASE is one of: help, dof, roundtrip, errors, outputs, hostile, ipf (and options). Every check prints what it ran
+# CASE is one of: help, dof, roundtrip, errors, outputs, hostile, ipf, options, lens, views
+# and formats. Every check prints what it ran
 # and what it saw when it fails; the script exits non-zero if any check failed.
 set -u
 
@@ -78,6 +79,25 @@ need_oiiotool() {
   fi
 }
 
+# pixel_of FILE X Y: the values of pixel (X, Y) of FILE, space separated; for an integer file
+# as 0..1 (oiiotool prints those in parentheses after the integers).
+pixel_of() {
+  oiiotool --dumpdata "$1" 2>/dev/null | sed -n "s/^ *Pixel ($2, $3): \(.*\)/\1/p" |
+    sed 's/.*(\(.*\))$/\1/; s/ *$//'
+}
+
+# expect_pixel FILE X Y "R G B" TOLERANCE DESCRIPTION: each channel within TOLERANCE.
+expect_pixel() {
+  local have
+  have=$(pixel_of "$1" "$2" "$3")
+  if ! awk -v have="$have" -v want="$4" -v tol="$5" 'BEGIN {
+      n = split(have, h, " "); m = split(want, w, " ");
+      if (n != m) exit 1;
+      for (i = 1; i <= n; i++) if (h[i] - w[i] > tol || w[i] - h[i] > tol) exit 1 }'; then
+    fail "$6: pixel ($2, $3) of $1 is [$have], expected [$4] within $5"
+  fi
+}
+
 rm -rf "$work"
 mkdir -p "$work"
 
@@ -90,6 +110,9 @@ help)
   run dof --help
   expect_status 0 "tridiff dof --help"
   expect_in "$out" "--focus" "tridiff dof --help"
+  for option in --focus-at --focus-range --view --float focal-plane; do
+    expect_in "$out" "$option" "tridiff dof --help"
+  done
   run methods
   expect_status 0 "tridiff methods"
   expect_in "$out" "adi" "tridiff methods"
@@ -636,6 +659,168 @@ options)
     --far-start 5 --far-end 9 --far-radius 4 -o ok.png
   expect_status 0 "dof --threads 1024 with both artist-curve regions"
   expect_only_files "$d" ok.png ok_coc.png
+  ;;
+
+lens)
+  # Where the lens focuses (issue 26): at a pixel's depth, over a range; and the lens in use,
+  # with the values that are tridiff's defaults, said when the image is the user's.
+  need_oiiotool
+  d=$work/l
+  mkdir -p "$d"
+  # 128 x 48: 1 m for x < 16, 20 m for 40 <= x < 48, 3.2 m (the default focus) elsewhere.
+  oiiotool --pattern constant:color=3.2 128x48 1 --fill:color=1 16x48+0+0 \
+    --fill:color=20 8x48+40+0 -d float -o "$work/depth.exr" &&
+    oiiotool --pattern constant:color=0.5,0.5,0.5 128x48 3 -d half -o "$work/color.exr" ||
+    fail "oiiotool"
+  files=(--color "$work/color.exr" --depth "$work/depth.exr")
+
+  run dof "${files[@]}" -o "$d/a.png" --report "$d/a.json"
+  expect_status 0 "dof on files with the default lens"
+  expect_in "$out" "lens     50 mm f/2.8 focused at 3.2 m, sensor 36 mm (defaults: focus, focal-length, f-number, sensor-width; give them for your camera)" "the default lens said"
+  expect_in "$(cat "$d/a.json" 2>/dev/null)" '"lens_defaults": ["focus", "focal-length", "f-number", "sensor-width"]' "the default lens in the report"
+  run dof "${files[@]}" -o "$d/b.png" --focus 2 --f-number 4 --focal-length 35 --sensor-width 24
+  expect_status 0 "dof on files with the whole lens given"
+  expect_in "$out" "lens     35 mm f/4 focused at 2 m, sensor 24 mm" "the lens given"
+  [[ $out != *defaults* ]] || fail "the lens given is not a default: $out"
+  run dof --width 64 --height 36 -o "$d/c.png"
+  expect_status 0 "dof on the built-in scene"
+  [[ $out != *"lens     "* ]] || fail "the built-in scene's lens is its own, no lens line: $out"
+
+  # The 5 x 5 median: column 15 has three columns at 1 m in its window, column 16 three at 3.2.
+  run dof "${files[@]}" -o "$d/e.png" --focus-at 15,20
+  expect_status 0 "--focus-at 15,20"
+  expect_in "$out" "focused at 1 m (the depth at pixel (15, 20)" "--focus-at on the near side"
+  run dof "${files[@]}" -o "$d/f.png" --focus-at 16,20
+  expect_status 0 "--focus-at 16,20"
+  expect_in "$out" "focused at 3.2 m (the depth at pixel (16, 20)" "--focus-at on the far side"
+  run dof --width 64 --height 36 -o "$d/g.png" --focus-at 63,35
+  expect_status 0 "--focus-at on the built-in scene's corner"
+
+  # --focus-range 2,5 at f/2: 3.2 m sharp; 1 m as focused at 2 m: A f (d - 2)/(d (2 - f)) on
+  # the sensor = 0.025 * 0.05 * -1 / 1.95 m, * 1000 / 36 * 128 px = -2.2792 px; 20 m as focused
+  # at 5 m: 0.025 * 0.05 * 15 / (20 * 4.95) * 1000 / 36 * 128 = 0.67340 px.
+  run dof "${files[@]}" -o "$d/h.png" --focus-range 2,5 --f-number 2 --coc-output "$d/h.exr" --float
+  expect_status 0 "--focus-range 2,5"
+  expect_in "$out" "in focus from 2 to 5 m" "--focus-range in the lens line"
+  expect_pixel "$d/h.exr" 5 10 "-2.2792" 2e-4 "CoC in front of the range"
+  expect_pixel "$d/h.exr" 30 10 "0" 0 "CoC inside the range"
+  expect_pixel "$d/h.exr" 44 10 "0.67340" 2e-4 "CoC behind the range"
+  expect_only_files "$d" a.png a_coc.png a.json b.png b_coc.png c.png c_coc.png e.png e_coc.png \
+    f.png f_coc.png g.png g_coc.png h.png h.exr
+
+  # Refusals, before any output is written.
+  e=$work/refused
+  mkdir -p "$e"
+  for bad in "--focus-at 128,0|outside the 128 x 48" "--focus-at 0,-1|outside" \
+    "--focus-at 1.5,2|X,Y" "--focus-at 3|X,Y" "--focus-at 1,2,3|X,Y" \
+    "--focus-at 3,3 --focus 2|--focus" "--focus-range 1,2 --focus 2|--focus" \
+    "--focus-range 1,2 --focus-at 1,1|--focus-at" "--focus-range 3,1|nearer than its near end" \
+    "--focus-range 0.01,1|focal length" "--focus-range 0,1|> 0" "--focus-range 1|NEAR,FAR" \
+    "--focus-range 1,x|NEAR,FAR" "--focus-range 1,2 --near-start 1 --near-end 2 --near-radius 3|--near-start"; do
+    option=${bad%%|*}
+    needle=${bad#*|}
+    # shellcheck disable=SC2086
+    run dof "${files[@]}" -o "$e/x.png" $option
+    expect_status nonzero "$option"
+    expect_in "$err" "${option%% *}" "$option (names the option)"
+    expect_in "$err" "$needle" "$option"
+    expect_only_files "$e"
+  done
+  ;;
+
+views)
+  # --view: a picture of what the method sees, at known pixels of a synthetic frame (the depth
+  # of the lens case at f/1.4: 1 m is CoC -4.4 px, near; 20 m +1.7 px, far; 3.2 m sharp).
+  need_oiiotool
+  d=$work/v
+  mkdir -p "$d"
+  oiiotool --pattern constant:color=3.2 128x48 1 --fill:color=1 16x48+0+0 \
+    --fill:color=20 8x48+40+0 -d float -o "$work/depth.exr" &&
+    oiiotool --pattern constant:color=0.5,0.5,0.5 128x48 3 -d half -o "$work/color.exr" ||
+    fail "oiiotool"
+  files=(--color "$work/color.exr" --depth "$work/depth.exr" --f-number 1.4 --coc-output none)
+  for view in coc focal-plane layers tiles; do
+    run dof "${files[@]}" --view "$view" -o "$d/$view.png" --report "$d/$view.json"
+    expect_status 0 "--view $view"
+    expect_in "$out" "view     $view" "--view $view summary"
+    expect_in "$(cat "$d/$view.json" 2>/dev/null)" "\"view\": \"$view\"" "--view $view report"
+    expect_size "$d/$view.png" "128 x 48"
+  done
+  # PNG is sRGB: linear 0.25 is 137/255, 0.5 is 188/255, 0.125 is 99/255.
+  expect_pixel "$d/coc.png" 5 20 "0 0.5373 1" 0.005 "coc view, near"
+  expect_pixel "$d/coc.png" 30 20 "0 0 0" 0 "coc view, sharp"
+  expect_pixel "$d/focal-plane.png" 5 20 "0 0 1" 0 "focal-plane view, near"
+  expect_pixel "$d/focal-plane.png" 30 20 "0 1 0" 0 "focal-plane view, in focus"
+  expect_pixel "$d/focal-plane.png" 44 20 "1 0 0" 0 "focal-plane view, far"
+  expect_pixel "$d/layers.png" 5 20 "1 1 1" 0 "layers view, near layer"
+  expect_pixel "$d/layers.png" 44 20 "0 0 0" 0 "layers view, far background"
+  # Tiles of 32: x < 64 is reached by the near and far discs; x >= 64 is skipped, darkened.
+  expect_pixel "$d/tiles.png" 20 20 "0.7373 0.7373 0.7373" 0.005 "tiles view, worked tile"
+  expect_pixel "$d/tiles.png" 100 20 "0.3882 0.3882 0.3882" 0.005 "tiles view, skipped tile"
+  run dof "${files[@]}" --view tiles --no-skip -o "$d/all.png"
+  expect_pixel "$d/all.png" 100 20 "0.7373 0.7373 0.7373" 0.005 "tiles view with --no-skip"
+  # A wider --in-focus takes the far 1.7 px in.
+  run dof "${files[@]}" --view focal-plane --in-focus 2 -o "$d/wide.png"
+  expect_pixel "$d/wide.png" 44 20 "0 1 0" 0 "focal-plane view, --in-focus 2"
+
+  e=$work/refused
+  mkdir -p "$e"
+  run dof "${files[@]}" --view depth -o "$e/x.png"
+  expect_status nonzero "--view depth"
+  expect_in "$err" "--view" "--view depth"
+  expect_in "$err" "coc, focal-plane, layers or tiles" "--view depth"
+  expect_only_files "$e"
+  ;;
+
+formats)
+  # Output formats (issue 26): 32-bit OpenEXR with --float, .hdr from any colour image, .pfm
+  # refused before the work.
+  need_oiiotool
+  d=$work/f
+  mkdir -p "$d"
+  # 1 + 2^-20 is between two halves; 1e6 is beyond half; all at the focus: nothing blurs.
+  oiiotool --pattern constant:color=1.00000095367431640625,0.5,1000000 8x4 3 -d float \
+    -o "$work/color.exr" &&
+    oiiotool --pattern constant:color=1.00000095367431640625,0.5,2 8x4 3 -d float \
+      -o "$work/small.exr" &&
+    oiiotool --pattern constant:color=0.3,0.5,0.7,1 8x4 4 -d half -o "$work/rgba.exr" &&
+    oiiotool --pattern constant:color=3.2 8x4 1 -d float -o "$work/depth.exr" || fail "oiiotool"
+  for input in color small; do
+    run dof --color "$work/$input.exr" --depth "$work/depth.exr" --float -o "$d/$input.exr" \
+      --input-output "$d/${input}_in.exr" --coc-output none
+    expect_status 0 "--float from $input.exr"
+    for written in "$input.exr" "${input}_in.exr"; do
+      expect_in "$(oiiotool --info "$d/$written" 2>&1)" "float openexr" "--float: $written"
+      oiiotool --fail 0 --warn 0 "$work/$input.exr" "$d/$written" --diff >/dev/null ||
+        fail "--float: $d/$written differs from $work/$input.exr"
+    done
+  done
+  # Without --float a frame within half's range is half: 1 + 2^-20 is lost.
+  run dof --color "$work/small.exr" --depth "$work/depth.exr" -o "$d/half.exr" --coc-output none
+  expect_in "$(oiiotool --info "$d/half.exr" 2>&1)" "half openexr" "half by default"
+  expect_pixel "$d/half.exr" 0 0 "1 0.5 2" 0 "half rounds 1 + 2^-20 to 1"
+
+  # .hdr from an RGBA image: it used to fail after the render ("HDR can only support
+  # 3-channel images"); alpha is left out. RGBE keeps 2^-7 of the largest channel.
+  run dof --color "$work/rgba.exr" --depth "$work/depth.exr" -o "$d/rgba.hdr" --coc-output none
+  expect_status 0 ".hdr from RGBA"
+  expect_in "$(oiiotool --info "$d/rgba.hdr" 2>&1)" "3 channel" ".hdr from RGBA"
+  expect_pixel "$d/rgba.hdr" 3 2 "0.3 0.5 0.7" 0.0055 ".hdr from RGBA"
+
+  e=$work/refused
+  mkdir -p "$e"
+  for option in --output --coc-output --input-output; do
+    output=()
+    [[ $option != --output ]] && output=(-o "$e/x.png")
+    run dof --color "$work/rgba.exr" --depth "$work/depth.exr" "${output[@]}" $option "$e/y.pfm"
+    expect_status nonzero "$option .pfm"
+    expect_in "$err" "$option: $e/y.pfm: unknown image format '.pfm'" "$option .pfm"
+    expect_only_files "$e"
+  done
+  run dof --color "$work/rgba.exr" --depth "$work/depth.exr" -o "$e/x.png" --float
+  expect_status nonzero "--float without an OpenEXR output"
+  expect_in "$err" "--float" "--float without an OpenEXR output"
+  expect_only_files "$e"
   ;;
 
 *)

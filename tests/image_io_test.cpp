@@ -179,6 +179,60 @@ TEST_F(ImageIo, ExrBeyondHalfRangeIsWrittenAsFloat) {
       for (int x = 0; x < 3; ++x) EXPECT_EQ(read(x, y, c), image(x, y, c));
 }
 
+// Half keeps 11 significant bits and ends at 65504: 1 + 2^-20 rounds to 1 in it, 1e6 does not
+// fit. With float32 both come back to the bit, and so does every other value.
+TEST_F(ImageIo, Float32ExrKeepsWhatHalfCannotHold) {
+  const float fine = 1.f + std::ldexp(1.f, -20);
+  Image image = random_image(5, 3, 3, 0.001f, 8.f, 11);
+  image(0, 0, 0) = fine;
+  image(1, 2, 2) = 1e6f;
+  image(4, 1, 1) = -3.f + std::ldexp(1.f, -21);
+  write_image(file("float.exr"), image, {.float32 = true});
+  EXPECT_EQ(spec_of(file("float.exr")).format, OIIO::TypeDesc::FLOAT);
+  const Image read = read_color(file("float.exr")).pixels;
+  for (int c = 0; c < 3; ++c)
+    for (int y = 0; y < 3; ++y)
+      for (int x = 0; x < 5; ++x)
+        EXPECT_TRUE(same_bits(read(x, y, c), image(x, y, c))) << x << ", " << y << ", " << c;
+  // Without it, a frame within half's range is written as half: the fine value is lost.
+  Image small = image;
+  small(1, 2, 2) = 2.f;
+  write_image(file("half.exr"), small);
+  EXPECT_EQ(spec_of(file("half.exr")).format, OIIO::TypeDesc::HALF);
+  EXPECT_EQ(read_color(file("half.exr")).pixels(0, 0, 0), 1.f);
+}
+
+// Radiance RGBE: a shared exponent and 8 bits of mantissa per channel, so a channel is kept to
+// within 2^-7 of the pixel's largest channel (a step of 2^(e-8), the largest in [2^(e-1), 2^e)).
+// Grey is written as three equal channels and alpha is left out (the writer takes exactly 3).
+TEST_F(ImageIo, HdrRoundTripWithinRgbePrecision) {
+  for (const int channels : {1, 3, 4}) {
+    const Image image = random_image(9, 4, channels, 0.001f, 100.f, 12);
+    const std::string path = file("rgbe" + std::to_string(channels) + ".hdr");
+    write_image(path, image);
+    const Image read = read_color(path).pixels;
+    ASSERT_EQ(read.channels(), 3) << channels;
+    const int colour = channels == 4 ? 3 : channels;
+    for (int y = 0; y < 4; ++y)
+      for (int x = 0; x < 9; ++x) {
+        float largest = 0;
+        for (int c = 0; c < colour; ++c) largest = std::max(largest, image(x, y, c));
+        for (int c = 0; c < 3; ++c)
+          ASSERT_NEAR(read(x, y, c), image(x, y, std::min(c, colour - 1)),
+                      largest * std::ldexp(1.f, -7))
+              << channels << " channels, pixel " << x << ", " << y << ", " << c;
+      }
+  }
+}
+
+// OpenImageIO 2.4 reads PFM but has no writer for it: refused from the path alone.
+TEST_F(ImageIo, PfmIsRefusedBeforeAnyImage) {
+  const std::string message = message_of([&] { check_image_path(file("out.pfm")); });
+  EXPECT_TRUE(contains(message, "out.pfm: unknown image format '.pfm'"));
+  EXPECT_TRUE(contains(message, ".exr"));
+  EXPECT_TRUE(listing().empty());
+}
+
 TEST_F(ImageIo, HalfExrRoundTripWithinHalfPrecision) {
   const Image image = random_image(19, 7, 4, 0.001f, 8.f, 2);
   write_image(file("half.exr"), image);
@@ -691,10 +745,10 @@ TEST_F(ImageIo, FailedWriteKeepsTheOldFile) {
   EXPECT_EQ(bytes_of(target), before);
   EXPECT_EQ(listing(), (std::set<std::string>{"keep.png"}));
 
-  // HDR holds exactly 3 channels.
+  // HDR holds RGB, and alpha it leaves out: five channels are refused.
   write_image(file("keep.hdr"), random_image(4, 4, 3, 0.f, 1.f, 9));
   const std::string hdr = bytes_of(file("keep.hdr"));
-  EXPECT_THROW(write_image(file("keep.hdr"), Image(4, 4, 4)), ImageIoError);
+  EXPECT_THROW(write_image(file("keep.hdr"), Image(4, 4, 5)), ImageIoError);
   EXPECT_EQ(bytes_of(file("keep.hdr")), hdr);
   EXPECT_EQ(listing(), (std::set<std::string>{"keep.png", "keep.hdr"}));
 }

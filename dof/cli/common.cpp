@@ -12,6 +12,7 @@
 #include <cstdlib>
 #include <functional>
 #include <sstream>
+#include <type_traits>
 
 #include "tridiff/dof/lens.hpp"
 #include "tridiff/dof/scene.hpp"
@@ -54,7 +55,7 @@ const std::vector<std::string> kInputOptions = {
     "far",      "color-encoding", "width",         "height",           "focus",
     "f-number", "focal-length",   "sensor-width",  "max-coc",          "near-start",
     "near-end", "near-radius",    "far-start",     "far-end",          "far-radius",
-    "threads",  "max-pixels"};
+    "threads",  "max-pixels",     "focus-at",      "focus-range"};
 
 const char* const kInputUsage = R"(input
   --color FILE              colour image (PNG, JPEG, TIFF, OpenEXR, ...)
@@ -67,8 +68,15 @@ const char* const kInputUsage = R"(input
   --width W, --height H     size of the built-in scene (default 1920 x 1080; not with --color)
   --max-pixels N            larger input images are refused before they are read
                             (default 268435456, 16384 x 16384)
-lens (thin lens, seed 000 eq. 3.2)
+lens (thin lens, seed 000 eq. 3.2; with --color the summary names the values left at
+      these defaults, which are not your camera's)
   --focus M                 focus distance, metres (default 3.2; built-in scene: 3.95, its sphere)
+  --focus-at X,Y            focus at the depth of pixel (X, Y) (0,0 top left): the median of
+                            the valid depths in the 5 x 5 pixels around it, so that a pixel
+                            on an edge focuses on its own side (not with --focus)
+  --focus-range NEAR,FAR    everything from NEAR to FAR metres is sharp; nearer blurs as if
+                            focused at NEAR, farther as if focused at FAR (not with --focus
+                            or --focus-at)
   --f-number N              aperture f-number (default 2.8; built-in scene: 1.8)
   --focal-length MM         focal length (default 50)
   --sensor-width MM         sensor width the image spans (default 36)
@@ -205,8 +213,10 @@ void with_options_named(const std::function<void()>& work) {
   with_fields_as_options(kInputOptions, work);
 }
 
-const std::vector<std::string> kLensOptions = {"focus", "f-number", "focal-length", "sensor-width",
-                                               "max-coc"};
+const std::vector<std::string> kLensOptions = {
+    "focus", "focus-at", "focus-range", "f-number", "focal-length", "sensor-width", "max-coc"};
+// The options that say where the lens focuses: one at most.
+const std::vector<std::string> kFocusOptions = {"focus", "focus-at", "focus-range"};
 const std::vector<std::string> kCurveOptions = {"near-start", "near-end",    "far-start",
                                                 "far-end",    "near-radius", "far-radius"};
 
@@ -228,6 +238,96 @@ ArtistCurve artist_curve(const Arguments& args) {
   return c;
 }
 
+// The two values of an option written "A,B"; InvalidArgument naming --key otherwise.
+std::pair<std::string, std::string> value_pair(const Arguments& args, const std::string& key,
+                                               const std::string& form) {
+  const std::string text = args.text(key, "");
+  const auto comma = text.find(',');
+  if (comma == std::string::npos || text.find(',', comma + 1) != std::string::npos)
+    throw InvalidArgument("--" + key, "'" + text + "' is not " + form);
+  return {text.substr(0, comma), text.substr(comma + 1)};
+}
+
+// A value of value_pair as a number, through Arguments' own checks, named --key.
+template <class Number>
+Number pair_part(const std::string& key, const std::string& part, const std::string& whole,
+                 const std::string& form) {
+  Arguments one;
+  one.values[key] = part;
+  try {
+    if constexpr (std::is_integral_v<Number>)
+      return one.integer(key, 0);
+    else
+      return one.number(key, 0.f);
+  } catch (const InvalidArgument&) {
+    throw InvalidArgument("--" + key, "'" + whole + "' is not " + form);
+  }
+}
+
+struct PixelAt {
+  int x = 0, y = 0;
+};
+
+PixelAt focus_at(const Arguments& args) {
+  const std::string form = "X,Y (a pixel, two whole numbers)";
+  const auto [x, y] = value_pair(args, "focus-at", form);
+  const std::string whole = args.text("focus-at", "");
+  return {pair_part<int>("focus-at", x, whole, form), pair_part<int>("focus-at", y, whole, form)};
+}
+
+// --focus-range as the lens's range (validated with the lens).
+void apply_focus_range(const Arguments& args, ThinLens& lens) {
+  const std::string form = "NEAR,FAR (two distances in metres)";
+  const auto [near, far] = value_pair(args, "focus-range", form);
+  const std::string whole = args.text("focus-range", "");
+  lens.focus_near_m = pair_part<float>("focus-range", near, whole, form);
+  lens.focus_far_m = pair_part<float>("focus-range", far, whole, form);
+}
+
+// The parts of the lens that the user can give, and how the summary names them.
+struct LensPart {
+  const char* option;
+  const char* name;
+};
+
+// The lens as a photographer says it, and which of its values are tridiff's defaults rather
+// than the user's (only with --color: the built-in scene's lens is the scene's own).
+void describe_lens(const Arguments& args, const ThinLens& lens, const std::string& focus_text,
+                   Frame& frame) {
+  std::ostringstream text;
+  text << lens.focal_length_mm << " mm f/" << lens.f_number << " " << focus_text << ", sensor "
+       << lens.sensor_width_mm << " mm";
+  frame.lens = text.str();
+  if (!args.has("color")) return;
+  if (first_given(args, kFocusOptions).empty()) frame.lens_defaults.push_back("focus");
+  for (const char* option : {"focal-length", "f-number", "sensor-width"})
+    if (!args.has(option)) frame.lens_defaults.push_back(option);
+}
+
+// Where the thin lens focuses: --focus, the depth at --focus-at's pixel, or --focus-range; the
+// words for the summary.
+std::string focus_lens(const Arguments& args, const Frame& frame, ThinLens& lens) {
+  std::ostringstream text;
+  if (args.has("focus-range")) {
+    apply_focus_range(args, lens);
+    text << "in focus from " << lens.focus_near_m << " to " << lens.focus_far_m << " m";
+    return text.str();
+  }
+  if (args.has("focus-at")) {
+    const PixelAt pixel = focus_at(args);
+    with_fields_as_options(
+        {"focus-at"},
+        [&] { lens.focus_distance_m = focus_depth_at(frame.depth.plane(0), pixel.x, pixel.y); },
+        {{"pixel", "focus-at"}, {"depth", "focus-at"}});
+    text << "focused at " << lens.focus_distance_m << " m (the depth at pixel (" << pixel.x << ", "
+         << pixel.y << "), median of " << kFocusWindow << " x " << kFocusWindow << ")";
+    return text.str();
+  }
+  lens.focus_distance_m = args.number("focus", lens.focus_distance_m);
+  text << "focused at " << lens.focus_distance_m << " m";
+  return text.str();
+}
+
 // The thin lens, or the artist curve when any of its options is given.
 void compute_coc(const Arguments& args, int threads, ThinLens lens, Frame& frame) {
   frame.coc.reset(frame.color.width(), frame.color.height(), 1);
@@ -241,18 +341,46 @@ void compute_coc(const Arguments& args, int threads, ThinLens lens, Frame& frame
           << c.near_radius_px << " px, far " << c.far_start_m << "-" << c.far_end_m << " m radius "
           << c.far_radius_px << " px";
   } else {
-    lens.focus_distance_m = args.number("focus", lens.focus_distance_m);
     lens.f_number = args.number("f-number", lens.f_number);
     lens.focal_length_mm = args.number("focal-length", lens.focal_length_mm);
     lens.sensor_width_mm = args.number("sensor-width", lens.sensor_width_mm);
     lens.max_coc_px = args.number("max-coc", lens.max_coc_px);
-    with_options_named(
-        [&] { coc_thin_lens(frame.coc.plane(0), frame.depth.plane(0), lens, threads); });
-    model << "thin lens: focus " << lens.focus_distance_m << " m, f/" << lens.f_number << ", "
-          << lens.focal_length_mm << " mm, sensor " << lens.sensor_width_mm << " mm, max CoC "
-          << lens.max_coc_px << " px";
+    const std::string focus_text = focus_lens(args, frame, lens);
+    with_fields_as_options(
+        kInputOptions,
+        [&] { coc_thin_lens(frame.coc.plane(0), frame.depth.plane(0), lens, threads); },
+        {{"focus_near", "focus-range"}, {"focus_far", "focus-range"}});
+    model << "thin lens: ";
+    if (args.has("focus-range"))
+      model << "in focus " << lens.focus_near_m << "-" << lens.focus_far_m << " m";
+    else
+      model << "focus " << lens.focus_distance_m << " m";
+    model << ", f/" << lens.f_number << ", " << lens.focal_length_mm << " mm, sensor "
+          << lens.sensor_width_mm << " mm, max CoC " << lens.max_coc_px << " px";
+    describe_lens(args, lens, focus_text, frame);
   }
   frame.coc_model = model.str();
+}
+
+// One way to say where the lens focuses, and its value well formed (a pixel inside the frame is
+// checked once the depth is read).
+void check_focus_options(const Arguments& args) {
+  std::string given;
+  for (const std::string& key : kFocusOptions) {
+    if (!args.has(key)) continue;
+    if (!given.empty())
+      throw InvalidArgument(
+          "--" + key, "cannot go with --" + given + ": both say where the lens focuses; give one");
+    given = key;
+  }
+  if (args.has("focus-at")) focus_at(args);
+  if (args.has("focus-range")) {
+    ThinLens lens;
+    apply_focus_range(args, lens);
+    lens.focal_length_mm = args.number("focal-length", lens.focal_length_mm);
+    with_fields_as_options(kInputOptions, [&] { validate(lens); },
+                           {{"focus_near", "focus-range"}, {"focus_far", "focus-range"}});
+  }
 }
 
 }  // namespace
@@ -264,6 +392,7 @@ void check_input_options(const Arguments& args) {
         throw InvalidArgument("--" + std::string(key),
                               "sizes the built-in scene and cannot be used with --color (the "
                               "image has its own size)");
+  check_focus_options(args);
   const std::string curve = first_given(args, kCurveOptions);
   if (curve.empty()) return;
   const std::string lens = first_given(args, kLensOptions);

@@ -38,6 +38,11 @@ struct Frame {
   Image color, depth, coc;  // coc: signed diameter, pixels
   std::string source;       // what was read, for the summary
   std::string coc_model;    // the lens or curve used
+  // The thin lens as a photographer says it ("50 mm f/2.8 focused at 3.2 m, sensor 36 mm";
+  // empty with the artist curve), and with --color the lens options left at tridiff's
+  // defaults (focus, focal-length, f-number, sensor-width), which are not the user's camera.
+  std::string lens;
+  std::vector<std::string> lens_defaults;
   double load_seconds = 0, coc_seconds = 0;
 };
 

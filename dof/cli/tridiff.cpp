@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -17,6 +18,7 @@
 #include "common.hpp"
 #include "lens_character.hpp"
 #include "tridiff/dof/method.hpp"
+#include "tridiff/dof/views.hpp"
 #include "tridiff/image/io.hpp"
 #include "tridiff/image/output_files.hpp"
 
@@ -40,7 +42,16 @@ constexpr const char* kDofUsage = R"(method
   --no-skip                 process in-focus parts too (reference; same result, slower)
   --threads N               0 = all cores (default), at most 1024
 output
-  -o, --output FILE         result image (default tridiff_dof.png)
+  -o, --output FILE         result image (default tridiff_dof.png): .png .jpg .tif (16-bit)
+                            .exr (half) .hdr (RGBE: RGB, alpha left out); not .pfm (no writer)
+  --float                   OpenEXR outputs in 32-bit float, every value kept (default half:
+                            11 significant bits, float anyway past half's 65504)
+  --view V                  write to --output a picture of what the method sees instead of
+                            the result (the method does not run):
+                              coc          the signed CoC: blue near, red far, black sharp
+                              focal-plane  blue near, green in focus, red far (--in-focus)
+                              layers       white: the near layer that --layers blurs apart
+                              tiles        the input, the tiles skipped as in focus darkened
   --coc-output FILE         CoC map (default: <output stem>_coc.png): in .exr the signed
                             diameter in pixels, one channel; else a false-colour picture;
                             `none` writes none
@@ -54,9 +65,9 @@ changes. They must be regular files (or not exist yet): a device (/dev/null), a 
 socket, a folder, an input file or the file standard output is redirected to is refused.
 )";
 
-const std::vector<std::string> kDofFlags = {"layers", "no-skip", "help"};
+const std::vector<std::string> kDofFlags = {"layers", "no-skip", "help", "float"};
 const std::vector<std::string> kDofOptions = {"method",     "in-focus",     "psnr-budget", "output",
-                                              "coc-output", "input-output", "report"};
+                                              "coc-output", "input-output", "report",      "view"};
 
 void print_dof_usage() {
   std::fputs(kUsageHead, stdout);
@@ -64,24 +75,6 @@ void print_dof_usage() {
   std::fputs(kDofUsage, stdout);
   std::fputs(cli::kLensCharacterUsage, stdout);
   std::fputs(kOutputPolicy, stdout);
-}
-
-// A false-colour view of the CoC: red for the far field, blue for the near field, black where
-// sharp; full brightness at the largest |CoC| of the frame.
-Image coc_picture(ConstPlane coc) {
-  float largest = 1e-6f;
-  for (std::ptrdiff_t y = 0; y < coc.height(); ++y)
-    for (std::ptrdiff_t x = 0; x < coc.width(); ++x)
-      largest = std::max(largest, std::abs(coc(x, y)));
-  Image picture(coc.width(), coc.height(), 3);
-  for (std::ptrdiff_t y = 0; y < coc.height(); ++y)
-    for (std::ptrdiff_t x = 0; x < coc.width(); ++x) {
-      const float v = coc(x, y) / largest;
-      picture(x, y, 0) = std::max(v, 0.f);
-      picture(x, y, 1) = 0.25f * std::abs(v);
-      picture(x, y, 2) = std::max(-v, 0.f);
-    }
-  return picture;
 }
 
 // A progress bar on stderr, only when stderr is a terminal.
@@ -118,17 +111,31 @@ std::string json_string(const std::string& text) {
   return quoted + "\"";
 }
 
-// The CoC map as an image: in a float format (OpenEXR) the signed diameter in pixels itself,
-// one channel; otherwise the false-colour picture.
-Image coc_output_image(const std::string& path, ConstPlane coc) {
+std::string lowercase_extension(const std::string& path) {
   std::string extension = fs::path(path).extension().string();
   std::transform(extension.begin(), extension.end(), extension.begin(),
                  [](unsigned char c) { return char(std::tolower(c)); });
-  if (extension != ".exr") return coc_picture(coc);
+  return extension;
+}
+
+// The CoC map as an image: in a float format (OpenEXR) the signed diameter in pixels itself,
+// one channel; otherwise the false-colour picture.
+Image coc_output_image(const std::string& path, ConstPlane coc) {
+  if (lowercase_extension(path) != ".exr") return coc_view(coc);
   Image values(coc.width(), coc.height(), 1);
   for (std::ptrdiff_t y = 0; y < coc.height(); ++y)
     std::copy(coc.row(y), coc.row(y) + coc.width(), values.plane(0).row(y));
   return values;
+}
+
+// The lens in use, and the values of it that are tridiff's defaults rather than the user's.
+std::string lens_line(const cli::Frame& frame) {
+  std::string line = frame.lens;
+  if (frame.lens_defaults.empty()) return line;
+  line += " (defaults: ";
+  for (std::size_t i = 0; i < frame.lens_defaults.size(); ++i)
+    line += (i ? ", " : "") + frame.lens_defaults[i];
+  return line + "; give them for your camera)";
 }
 
 std::string default_coc_path(const std::string& output) {
@@ -142,8 +149,30 @@ struct DofPlan {
   const DofMethod* method = nullptr;
   std::string output, coc_output;  // coc_output empty: not written
   DofOptions settings;
+  std::optional<DofView> view;  // a picture of what the method sees instead of its result
+  bool float32 = false;         // --float
   OutputFiles files;
 };
+
+// What --view writes, for the summary.
+const char* view_legend(DofView view) {
+  switch (view) {
+    case DofView::coc: return "coc: the signed CoC, blue near, red far, black sharp";
+    case DofView::focal_plane: return "focal-plane: blue near, green in focus, red far";
+    case DofView::layers: return "layers: white the near layer, black the background";
+    case DofView::tiles: return "tiles: the input, the tiles skipped as in focus darkened";
+  }
+  return "";
+}
+
+// --float asks for 32-bit OpenEXR: refused when no output is OpenEXR, where it would do nothing.
+void check_float_applies(const cli::Arguments& args, const DofPlan& plan) {
+  if (!plan.float32) return;
+  for (const std::string& path :
+       {plan.output, plan.coc_output, args.text("input-output", std::string())})
+    if (lowercase_extension(path) == ".exr") return;
+  throw InvalidArgument("--float", "no output is OpenEXR (.exr), the one format it applies to");
+}
 
 DofPlan plan_dof(const cli::Arguments& args) {
   DofPlan plan;
@@ -154,19 +183,30 @@ DofPlan plan_dof(const cli::Arguments& args) {
   plan.settings.skip_in_focus = !args.flag("no-skip");
   plan.settings.in_focus_coc_px = args.number("in-focus", 1.f);
   plan.settings.error_budget_psnr = args.number("psnr-budget", 30.f);
+  if (args.has("view"))
+    cli::with_fields_as_options({"view"},
+                                [&] { plan.view = dof_view_named(args.text("view", "")); });
+  plan.float32 = args.flag("float");
   plan.output = args.text("output", "tridiff_dof.png");
   plan.coc_output = args.text("coc-output", default_coc_path(plan.output));
   if (plan.coc_output == "none") plan.coc_output.clear();
   cli::register_inputs(args, plan.files);
   cli::plan_lens_character(args, plan.settings, plan.files);
   const auto claim_image = [&](const std::string& option, const std::string& path) {
-    check_image_path(path);  // a format that can be written
+    try {
+      check_image_path(path);              // a format that can be written
+    } catch (const ImageIoError& error) {  // "tridiff: PATH: ..." with the option named
+      const std::string message = error.what(), prefix = "tridiff: ";
+      throw ImageIoError(prefix + option + ": " +
+                         (message.rfind(prefix, 0) == 0 ? message.substr(prefix.size()) : message));
+    }
     plan.files.claim(option, path);
   };
   claim_image("--output", plan.output);
   if (!plan.coc_output.empty()) claim_image("--coc-output", plan.coc_output);
   if (args.has("input-output")) claim_image("--input-output", args.text("input-output", ""));
   if (args.has("report")) plan.files.claim("--report", args.text("report", ""));
+  check_float_applies(args, plan);
   return plan;
 }
 
@@ -195,30 +235,41 @@ int run_dof(const cli::Arguments& args) {
   Image separate_result;
   Image& result = in_place ? frame.color : separate_result;
   const auto method_start = std::chrono::steady_clock::now();
-  cli::with_coc_named(args, [&] {
-    cli::with_lens_character_named(
-        [&] { report = depth_of_field(result, color, coc.plane(0), method, settings); });
-  });
+  Image view_picture;
+  if (plan.view)
+    view_picture = dof_view(*plan.view, color, coc.plane(0), settings);
+  else
+    cli::with_coc_named(args, [&] {
+      cli::with_lens_character_named(
+          [&] { report = depth_of_field(result, color, coc.plane(0), method, settings); });
+    });
   const double method_seconds = seconds(method_start);
 
   const auto write_start = std::chrono::steady_clock::now();
-  const WriteOptions write{.threads = plan.threads};
-  outputs.stage("--output", encode_image(plan.output, result, write));
+  const WriteOptions write{.threads = plan.threads, .float32 = plan.float32};
+  outputs.stage("--output", encode_image(plan.output, plan.view ? view_picture : result, write));
   if (!plan.coc_output.empty())
-    outputs.stage("--coc-output",
-                  encode_image(plan.coc_output, coc_output_image(plan.coc_output, coc.plane(0)),
-                               {.encoding = ColorEncoding::Linear, .threads = plan.threads}));
+    outputs.stage(
+        "--coc-output",
+        encode_image(
+            plan.coc_output, coc_output_image(plan.coc_output, coc.plane(0)),
+            {.encoding = ColorEncoding::Linear, .threads = plan.threads, .float32 = plan.float32}));
   if (args.has("input-output"))
     outputs.stage("--input-output", encode_image(args.text("input-output", ""), color, write));
   const double write_seconds = seconds(write_start);
 
   std::ostringstream text, json;
-  text << "tridiff dof: " << source << "\n"
-       << "  method   " << method.name
-       << (report.chosen_method.empty() ? "" : " -> " + report.chosen_method)
-       << (report.layered ? " (layered)" : "") << "\n"
-       << "  coc      " << frame.coc_model << "\n"
-       << "  skipped  " << 100.0 * report.skipped_fraction << " % of the per-pixel work\n";
+  text << "tridiff dof: " << source << "\n";
+  if (plan.view)
+    text << "  view     " << view_legend(*plan.view) << " (no depth of field computed)\n";
+  else
+    text << "  method   " << method.name
+         << (report.chosen_method.empty() ? "" : " -> " + report.chosen_method)
+         << (report.layered ? " (layered)" : "") << "\n";
+  text << "  coc      " << frame.coc_model << "\n";
+  if (args.has("color") && !frame.lens.empty()) text << "  lens     " << lens_line(frame) << "\n";
+  if (!plan.view)
+    text << "  skipped  " << 100.0 * report.skipped_fraction << " % of the per-pixel work\n";
   if (report.explicit_steps) text << "  steps    " << report.explicit_steps << " explicit steps\n";
   text << "  time     input " << load_seconds * 1e3 << " ms, coc " << coc_seconds * 1e3 << " ms, ";
   for (const DofStage& stage : report.stages)
@@ -233,7 +284,12 @@ int run_dof(const cli::Arguments& args) {
          << ",\n  \"method\": " << json_string(std::string(method.name))
          << ",\n  \"chosen_method\": " << json_string(report.chosen_method)
          << ",\n  \"layered\": " << (report.layered ? "true" : "false")
+         << ",\n  \"view\": " << json_string(args.text("view", ""))
          << ",\n  \"coc_model\": " << json_string(frame.coc_model)
+         << ",\n  \"lens\": " << json_string(frame.lens) << ",\n  \"lens_defaults\": [";
+    for (std::size_t i = 0; i < frame.lens_defaults.size(); ++i)
+      json << (i ? ", " : "") << json_string(frame.lens_defaults[i]);
+    json << "]"
          << ",\n  \"skipped_fraction\": " << report.skipped_fraction
          << ",\n  \"explicit_steps\": " << report.explicit_steps
          << ",\n  \"seconds\": {\"input\": " << load_seconds << ", \"coc\": " << coc_seconds;

@@ -466,15 +466,21 @@ bool exceeds_half(const Image& image) {
 // PNG and JPEG 8-bit, TIFF 16-bit (enough for smooth gradients after blurring), OpenEXR half
 // unless a value would overflow it, other float formats float, anything else 8-bit.
 OutputFormat choose_output_format(const std::string& extension, const Image& image,
-                                  ColorEncoding encoding) {
+                                  const WriteOptions& options) {
+  const ColorEncoding encoding = options.encoding;
   if (extension == "exr" || extension == "sxr" || extension == "mxr")
-    return {exceeds_half(image) ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::HALF, false};
+    return {options.float32 || exceeds_half(image) ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::HALF,
+            false};
   if (extension == "hdr" || extension == "rgbe" || extension == "pfm")
     return {OIIO::TypeDesc::FLOAT, false};
   const bool srgb = encoding != ColorEncoding::Linear;
   if (extension == "tif" || extension == "tiff") return {OIIO::TypeDesc::UINT16, srgb};
   return {OIIO::TypeDesc::UINT8, srgb};
 }
+
+bool is_rgbe(const std::string& extension) { return extension == "hdr" || extension == "rgbe"; }
+
+int color_plane_count(int channels) { return channels == 2 ? 1 : std::min(3, channels); }
 
 // Refuses, without touching the disk, a path whose format cannot be written: the extension
 // picks OpenImageIO's writer, and it must be able to encode into memory, where its result can
@@ -486,7 +492,10 @@ void check_path(const std::string& path, const std::string& extension) {
   const auto output = OIIO::ImageOutput::create(path);
   if (!output) {
     oiio_error();  // clear it: our message says the same
-    fail(path, "unknown image format '." + extension + "' (OpenImageIO has no writer for it)");
+    // OpenImageIO 2.4 reads PFM (its pnm plugin) but has no PFM writer.
+    const std::string hint = extension == "pfm" ? "; .exr keeps floating-point values" : "";
+    fail(path, "unknown image format '." + extension + "' (OpenImageIO has no writer for it" +
+                   hint + ")");
   }
   if (!output->supports("ioproxy"))
     fail(path, "tridiff cannot write the '" + std::string(output->format_name()) +
@@ -506,6 +515,18 @@ void check_output(const std::string& path, const std::string& extension, const I
       fail(path, "JPEG holds 1 or 3 channels (4: alpha is dropped), not " +
                      std::to_string(image.channels()));
   }
+  if (is_rgbe(extension) && image.channels() > 4)
+    fail(path, "Radiance HDR holds RGB (grey is expanded, alpha left out), not " +
+                   std::to_string(image.channels()) + " channels");
+}
+
+// Radiance's writer takes exactly three channels: grey (and grey + alpha) as three equal
+// channels, RGB as it is, RGBA without its alpha.
+Image as_rgb(const Image& image) {
+  Image rgb(image.width(), image.height(), 3);
+  const int colour = color_plane_count(image.channels());
+  for (int c = 0; c < 3; ++c) copy_plane(rgb.plane(c), image.plane(std::min(c, colour - 1)));
+  return rgb;
 }
 
 OIIO::ImageSpec output_spec(const Image& image, const OutputFormat& format,
@@ -529,8 +550,6 @@ OIIO::ImageSpec output_spec(const Image& image, const OutputFormat& format,
   if (spec.alpha_channel >= 0) spec.attribute("oiio:UnassociatedAlpha", 1);
   return spec;
 }
-
-int color_plane_count(int channels) { return channels == 2 ? 1 : std::min(3, channels); }
 
 // The planes interleaved as T, each value passed through store(value, is_colour_plane).
 template <class T, class Store>
@@ -676,7 +695,9 @@ std::vector<unsigned char> encode_image(const std::string& path, const Image& im
   resolve_threads(options.threads);
   const std::string extension = extension_of(path);
   check_output(path, extension, image);
-  const OutputFormat format = choose_output_format(extension, image, options.encoding);
+  if (is_rgbe(extension) && image.channels() != 3)
+    return encode_image(path, as_rgb(image), options);
+  const OutputFormat format = choose_output_format(extension, image, options);
   const OIIO::ImageSpec spec = output_spec(image, format, extension);
   if (format.type == OIIO::TypeDesc::UINT8)
     return encode(path, spec, format.type,

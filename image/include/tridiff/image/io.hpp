@@ -74,11 +74,16 @@ Image read_depth(const std::string& path, const DepthOptions& options = {});
 struct WriteOptions {
   ColorEncoding encoding = ColorEncoding::Auto;  // Linear: integer formats store linear values
   int threads = 0;                               // for the sRGB encoding; 0: all cores
+  // OpenEXR: 32-bit float, every value kept to the bit. Otherwise half (11 significant bits,
+  // half the size), or float when a value exceeds half's range.
+  bool float32 = false;
 };
 
 // The bytes of `image` (linear light) encoded in the format of `path`'s extension (.png .jpg
 // .tif .exr ...); nothing is written. Integer formats are sRGB-encoded and quantised unless
-// `options.encoding` is Linear; float formats (.exr, .hdr) keep linear values.
+// `options.encoding` is Linear; float formats (.exr, .hdr) keep linear values. Radiance .hdr
+// (RGBE: 8 bits of mantissa per channel and a shared exponent, no negative values) holds RGB
+// only: a grey image is written as three equal channels, an alpha channel is left out.
 std::vector<unsigned char> encode_image(const std::string& path, const Image& image,
                                         const WriteOptions& options = {});
 
