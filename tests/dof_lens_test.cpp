@@ -210,8 +210,14 @@ TEST(DofViews, FocalPlaneIsNearInFocusOrFarByTheInFocusSetting) {
 TEST(DofViews, LayersShowTheNearLayerMask) {
   const Image coc = row_coc();
   const Image mask = near_layer_mask(coc.plane(0), {});
-  const float expected[7] = {1, 1, 0, 0, 0, 0, 0};  // c <= -1 is the near layer
+  // The near field holds -5 and -1, two depths more than an octave apart: the layer is the
+  // nearer one (near_layer.hpp), the -1 px pixel blurs with the background.
+  const float expected[7] = {1, 0, 0, 0, 0, 0, 0};
   for (std::ptrdiff_t x = 0; x < 7; ++x) EXPECT_EQ(mask(x, 1, 0), expected[x]) << x;
+  // Within an octave the near field is one depth: all of it is the layer.
+  Image one_depth = row_coc();
+  one_depth(1, 0, 0) = one_depth(1, 1, 0) = -3.f;
+  EXPECT_EQ(near_layer_mask(one_depth.plane(0), {})(1, 1, 0), 1.f);
   const Image picture = dof_view(DofView::layers, Image(7, 2, 3), coc.plane(0), {});
   expect_colour(picture, 1, 0, 1.f, 1.f, 1.f);
   expect_colour(picture, 6, 0, 0.f, 0.f, 0.f);

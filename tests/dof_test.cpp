@@ -18,6 +18,7 @@
 
 #include "tridiff/dof/lens.hpp"
 #include "tridiff/dof/method.hpp"
+#include "tridiff/dof/near_layer.hpp"
 #include "tridiff/dof/scene.hpp"
 #include "test_util.hpp"
 
@@ -1102,6 +1103,37 @@ TEST(ApertureShape, PolygonRimAndArea) {
   EXPECT_FLOAT_EQ(aperture_rim(round, 0.3f), 1.f);
   EXPECT_TRUE(inside(ApertureShape{}, 0.7f, 0.7f));
   EXPECT_FALSE(inside(ApertureShape{}, 0.72f, 0.72f));
+}
+
+// A red bar far in front of the focus (CoC -30 px) covers the left of a green subject that is
+// itself slightly in front of the focus (CoC -3 px), over a far background (CoC +6 px). The
+// bar's blur must spread over the subject, as the scatter reference's does: the near layer
+// follows depth (near_layer.hpp), so the subject is not in the bar's layer, where the smaller
+// conductance of the two would keep the bar's edge razor sharp over it.
+TEST(DofLayers, NearObjectBlursOverASubjectJustInFrontOfTheFocus) {
+  const std::ptrdiff_t w = 160, h = 100, edge = 60;
+  Image color(w, h, 3), coc(w, h, 1);
+  for (std::ptrdiff_t y = 0; y < h; ++y)
+    for (std::ptrdiff_t x = 0; x < w; ++x) {
+      const bool bar = x < edge, subject = !bar && x < 120 && y >= 20 && y < 80;
+      const float rgb[3] = {bar ? 1.f : 0.f, subject ? 0.8f : 0.f, bar || subject ? 0.f : 0.6f};
+      for (int c = 0; c < 3; ++c) color(x, y, c) = rgb[c];
+      coc(x, y, 0) = bar ? -30.f : subject ? -3.f : 6.f;
+    }
+  const NearLayer near = near_layer(coc.plane(0), 1.f);
+  EXPECT_TRUE(near.contains(-30.f));
+  EXPECT_FALSE(near.contains(-3.f));
+  DofOptions layered;
+  layered.layers = true;
+  const Result adi = run(find_dof_method("adi"), color, coc, layered);
+  const Result scatter = run(find_dof_method("scatter"), color, coc);
+  ASSERT_TRUE(adi.report.layered);
+  for (std::ptrdiff_t d : {2, 4, 8}) {
+    const std::ptrdiff_t x = edge + d, y = 50;
+    const float red = adi.out(x, y, 0), reference = scatter.out(x, y, 0);
+    EXPECT_GT(reference, 0.1f) << d;  // the reference spreads the bar this far
+    EXPECT_NEAR(red, reference, 0.5f * reference) << "at " << d << " px into the subject";
+  }
 }
 
 }  // namespace

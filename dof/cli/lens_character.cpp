@@ -9,9 +9,9 @@
 
 namespace tridiff::cli {
 
-const std::vector<std::string> kLensCharacterOptions = {
-    "aperture-blades", "aperture-rotation",   "aperture-roundness",
-    "aperture-image",  "highlight-threshold", "highlight-gain"};
+const std::vector<std::string> kLensCharacterOptions = {"aperture-blades",     "aperture-rotation",
+                                                        "aperture-roundness",  "aperture-image",
+                                                        "highlight-threshold", "highlight-gain"};
 
 const char* const kLensCharacterUsage = R"(lens character (methods scatter, bokeh, auto)
   --aperture-blades N       0 = a circle (default), or a polygon of N >= 3 straight blades
@@ -41,10 +41,10 @@ void plan_lens_character(const Arguments& args, DofOptions& settings, OutputFile
 
 void load_aperture_image(const Arguments& args, DofOptions& settings, int threads) {
   if (!args.has("aperture-image")) return;
-  const Image color =
-      read_color(args.text("aperture-image", ""),
-                 {.encoding = ColorEncoding::Auto, .max_pixels = max_pixels(args), .threads = threads})
-          .pixels;
+  const Image color = read_color(args.text("aperture-image", ""), {.encoding = ColorEncoding::Auto,
+                                                                   .max_pixels = max_pixels(args),
+                                                                   .threads = threads})
+                          .pixels;
   // Rec. 709 luminance: the light the aperture lets through, whatever tint the picture has.
   auto kernel = std::make_shared<Image>(color.width(), color.height(), 1);
   for (std::ptrdiff_t y = 0; y < color.height(); ++y)

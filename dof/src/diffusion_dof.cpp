@@ -9,6 +9,7 @@
 
 #include "tridiff/threads.hpp"
 #include "frame.hpp"
+#include "tridiff/dof/near_layer.hpp"
 #include "stage_clock.hpp"
 
 namespace tridiff::dof_detail {
@@ -45,15 +46,11 @@ inline float filled(bool known, float known_value, float sum, float weight) {
   return weight > 1e-30f ? sum / weight : known_value;
 }
 
-// A pixel of the near field: in front of the focus and blurred (negative CoC).
-inline bool in_near_field(float coc_px, float in_focus_px) {
-  return FocusTest{in_focus_px}.is_near(coc_px);
-}
-
 bool has_near_blur(ConstPlane coc, float in_focus_px) {
+  const FocusTest focus{in_focus_px};
   for (std::ptrdiff_t y = 0; y < coc.height(); ++y)
     for (std::ptrdiff_t x = 0; x < coc.width(); ++x)
-      if (in_near_field(coc(x, y), in_focus_px)) return true;
+      if (focus.is_near(coc(x, y))) return true;
   return false;
 }
 
@@ -76,6 +73,9 @@ void layered_dof(Image& out, const DofFrame& frame, const DofOptions& settings, 
   const float fill_beta = adi_beta_for_coc(frame.max_abs_coc());
   const float in_focus = settings.in_focus_coc_px;
   DiffusionReport diffusion;  // of the two blurs (the fills are always solved in full)
+  NearLayer near;
+  timed(report, "near split", [&] { near = near_layer(coc, in_focus, threads); });
+  const auto in_near_field = [&near](float coc_px) { return near.contains(coc_px); };
 
   // Background: the near field cut out and its hole filled from around it, the colour and
   // the CoC alike (the colour planes solved together, then the CoC with the weight).
@@ -86,7 +86,7 @@ void layered_dof(Image& out, const DofFrame& frame, const DofOptions& settings, 
       float* kept_coc = background_coc.plane(0).row(y);
       float* keep = background_coc.plane(1).row(y);
       for (std::ptrdiff_t x = 0; x < width; ++x) {
-        keep[x] = in_near_field(k[x], in_focus) ? 0.f : 1.f;
+        keep[x] = in_near_field(k[x]) ? 0.f : 1.f;
         kept_coc[x] = keep[x] * std::abs(k[x]);
       }
       for (int c = 0; c < channels; ++c) {
@@ -105,11 +105,10 @@ void layered_dof(Image& out, const DofFrame& frame, const DofOptions& settings, 
         const float* original = color.plane(c).row(y);
         float* value = background.plane(c).row(y);
         for (std::ptrdiff_t x = 0; x < width; ++x)
-          value[x] = filled(!in_near_field(k[x], in_focus), original[x], value[x], weight[x]);
+          value[x] = filled(!in_near_field(k[x]), original[x], value[x], weight[x]);
       }
       for (std::ptrdiff_t x = 0; x < width; ++x)
-        filled_coc[x] =
-            filled(!in_near_field(k[x], in_focus), std::abs(k[x]), filled_coc[x], weight[x]);
+        filled_coc[x] = filled(!in_near_field(k[x]), std::abs(k[x]), filled_coc[x], weight[x]);
     });
   });
   timed(report, "background blur", [&] {
@@ -127,7 +126,7 @@ void layered_dof(Image& out, const DofFrame& frame, const DofOptions& settings, 
       float* inside = near_layer.plane(channels).row(y);
       float* sum = near_coc.plane(0).row(y);
       for (std::ptrdiff_t x = 0; x < width; ++x) {
-        inside[x] = in_near_field(k[x], in_focus) ? 1.f : 0.f;
+        inside[x] = in_near_field(k[x]) ? 1.f : 0.f;
         sum[x] = inside[x] * std::abs(k[x]);
       }
       std::copy(inside, inside + width, near_coc.plane(1).row(y));
@@ -143,7 +142,7 @@ void layered_dof(Image& out, const DofFrame& frame, const DofOptions& settings, 
       float* value = near_coc.plane(0).row(y);
       const float* weight = near_coc.plane(1).row(y);
       for (std::ptrdiff_t x = 0; x < width; ++x)
-        value[x] = filled(in_near_field(k[x], in_focus), std::abs(k[x]), value[x], weight[x]);
+        value[x] = filled(in_near_field(k[x]), std::abs(k[x]), value[x], weight[x]);
     });
     diffusion += diffuse(near_layer, near_layer, near_coc.plane(0), in_focus, options);
   });
@@ -164,6 +163,7 @@ void layered_dof(Image& out, const DofFrame& frame, const DofOptions& settings, 
     out = std::move(background);
   });
   report.layered = true;
+  report.notes += "near layer: CoC <= -" + std::to_string(near.split_px) + " px";
   report.skipped_fraction = diffusion.skipped_fraction();
 }
 

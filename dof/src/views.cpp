@@ -5,6 +5,7 @@
 #include <cmath>
 #include <string>
 
+#include "tridiff/dof/near_layer.hpp"
 #include "tridiff/dof/tiles.hpp"
 
 namespace tridiff {
@@ -17,12 +18,11 @@ void paint(Image& picture, std::ptrdiff_t x, std::ptrdiff_t y, const float (&rgb
 }  // namespace
 
 Image near_layer_mask(ConstPlane coc, const DofOptions& options) {
-  // The diffusion methods' in_near_field: keep the two in step when the rule changes.
-  const FocusTest focus{options.in_focus_coc_px};
+  const NearLayer near = near_layer(coc, options.in_focus_coc_px, options.threads);
   Image mask(coc.width(), coc.height(), 1);
   for (std::ptrdiff_t y = 0; y < coc.height(); ++y)
     for (std::ptrdiff_t x = 0; x < coc.width(); ++x)
-      mask(x, y, 0) = focus.is_near(coc(x, y)) ? 1.f : 0.f;
+      mask(x, y, 0) = near.contains(coc(x, y)) ? 1.f : 0.f;
   return mask;
 }
 

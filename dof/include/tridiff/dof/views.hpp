@@ -11,8 +11,8 @@ namespace tridiff {
 
 // The near layer that the diffusion methods blur on its own with DofOptions::layers: 1 where a
 // pixel belongs to it, 0 where it is background; one channel, the CoC map's size. The one
-// function outside the methods that states which pixels those are: it asks the same predicate
-// as dof/src/diffusion_dof.cpp (FocusTest::is_near with DofOptions::in_focus_coc_px).
+// function outside the methods that states which pixels those are: near_layer (near_layer.hpp),
+// as dof/src/diffusion_dof.cpp asks it.
 Image near_layer_mask(ConstPlane coc, const DofOptions& options);
 
 // The colours of the pictures.

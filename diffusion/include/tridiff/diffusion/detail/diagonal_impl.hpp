@@ -183,7 +183,8 @@ void solve_diagonal_segment(const DiagonalStrip<ToLink>& strip, int c0, std::ptr
   for (std::ptrdiff_t begin = 0; begin < n; begin += kDiagonalBlock) {
     const std::ptrdiff_t rows = std::min(kDiagonalBlock, n - begin);
     strip.links(k + begin * (W + 2), rows, begin + rows < n, links);
-    for (std::ptrdiff_t r = 0; r < rows; ++r) strip.prefetch(a + begin + r + kDiagonalBlock, c0, Rhs);
+    for (std::ptrdiff_t r = 0; r < rows; ++r)
+      strip.prefetch(a + begin + r + kDiagonalBlock, c0, Rhs);
     strip.template gather<Rhs>(c0, a + begin, rows, block);
     sweep.forward(begin, begin + rows, links, W, block, Rhs * W, W);
   }
