@@ -219,7 +219,8 @@ TEST(DofViews, LayersShowTheNearLayerMask) {
   one_depth(1, 0, 0) = one_depth(1, 1, 0) = -3.f;
   EXPECT_EQ(near_layer_mask(one_depth.plane(0), {})(1, 1, 0), 1.f);
   const Image picture = dof_view(DofView::layers, Image(7, 2, 3), coc.plane(0), {});
-  expect_colour(picture, 1, 0, 1.f, 1.f, 1.f);
+  expect_colour(picture, 0, 0, 1.f, 1.f, 1.f);
+  expect_colour(picture, 1, 0, 0.f, 0.f, 0.f);
   expect_colour(picture, 6, 0, 0.f, 0.f, 0.f);
 }
 

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <utility>
 
 #include "tridiff/threads.hpp"
 
@@ -13,16 +14,22 @@ namespace {
 constexpr int kBins = 64;
 using Histogram = std::array<double, kBins>;
 
-// The largest |CoC| of the near field (0 when there is none).
-float largest_near(ConstPlane coc, FocusTest focus, int threads) {
-  float largest = 0;
-#pragma omp parallel for num_threads(threads) schedule(static) reduction(max : largest)
+// The smallest and the largest |CoC| of the near field (+inf and 0 when there is none).
+std::pair<float, float> near_range(ConstPlane coc, FocusTest focus, int threads) {
+  float smallest = INFINITY, largest = 0;
+// clang-format off
+#pragma omp parallel for num_threads(threads) schedule(static) \
+    reduction(min : smallest) reduction(max : largest)
+  // clang-format on
   for (std::ptrdiff_t y = 0; y < coc.height(); ++y) {
     const float* row = coc.row(y);
     for (std::ptrdiff_t x = 0; x < coc.width(); ++x)
-      if (focus.is_near(row[x])) largest = std::max(largest, -row[x]);
+      if (focus.is_near(row[x])) {
+        smallest = std::min(smallest, -row[x]);
+        largest = std::max(largest, -row[x]);
+      }
   }
-  return largest;
+  return {smallest, largest};
 }
 
 // Near pixels by log2 |CoC| in kBins bins over [log2 low, log2 high].
@@ -73,14 +80,12 @@ int otsu_edge(const Histogram& h) {
 NearLayer near_layer(ConstPlane coc, float in_focus_coc_px, int threads) {
   const int team = resolve_threads(threads);
   NearLayer layer{FocusTest{in_focus_coc_px}, 0};  // the diffusion methods' threshold
-  const float low = std::max(layer.focus.sharp_below, 1e-3f);
-  layer.split_px = low;
-  const float high = largest_near(coc, layer.focus, team);
+  const auto [low, high] = near_range(coc, layer.focus, team);
+  layer.split_px = std::max(layer.focus.sharp_below, 0.f);
   if (!(high >= 2 * low)) return layer;  // no near field, or one depth: all of it
   const int edge = otsu_edge(near_histogram(coc, layer.focus, low, high, team));
-  layer.split_px = float(std::exp2(std::log2(double(low)) +
-                                   edge * (std::log2(double(high)) - std::log2(double(low))) /
-                                       kBins));
+  layer.split_px = float(std::exp2(
+      std::log2(double(low)) + edge * (std::log2(double(high)) - std::log2(double(low))) / kBins));
   return layer;
 }
 

@@ -20,8 +20,8 @@
 namespace tridiff {
 
 struct NearLayer {
-  FocusTest focus;           // near: c <= -focus.sharp_below
-  float split_px = 0;        // the near layer: c <= -split_px (split_px >= focus.sharp_below)
+  FocusTest focus;     // near: c <= -focus.sharp_below
+  float split_px = 0;  // the near layer: c <= -split_px (split_px >= focus.sharp_below)
   bool contains(float coc_px) const { return focus.is_near(coc_px) && -coc_px >= split_px; }
 };
 
