@@ -1407,5 +1407,72 @@ TEST(IsotropicDiffusion, SkipChangesNothingAndMassIsConserved) {
   }
 }
 
+// The reference: each of the four passes solved line by line in double by the Thomas
+// algorithm, with the links written out from their definition (adi.hpp, diagonal_impl.hpp).
+// A line is the pixels (x0 + i dx, y0 + i dy); link i joins pixels i and i + 1.
+void solve_line_reference(
+    Image& image, std::ptrdiff_t x0, std::ptrdiff_t y0, int dx, int dy,
+    const std::function<double(std::ptrdiff_t, std::ptrdiff_t, int, int)>& link) {
+  std::vector<std::pair<std::ptrdiff_t, std::ptrdiff_t>> pixels;
+  for (std::ptrdiff_t x = x0, y = y0; x >= 0 && x < image.width() && y >= 0 && y < image.height();
+       x += dx, y += dy)
+    pixels.push_back({x, y});
+  const std::size_t n = pixels.size();
+  std::vector<double> beta(n, 0.0);
+  for (std::size_t i = 0; i + 1 < n; ++i) beta[i] = link(pixels[i].first, pixels[i].second, dx, dy);
+  for (int c = 0; c < image.channels(); ++c) {
+    std::vector<double> lower(n), diag(n), upper(n), rhs(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const double before = i ? beta[i - 1] : 0.0;
+      lower[i] = -before;
+      upper[i] = -beta[i];
+      diag[i] = 1 + before + beta[i];
+      rhs[i] = image(pixels[i].first, pixels[i].second, c);
+    }
+    for (std::size_t i = 1; i < n; ++i) {
+      const double m = lower[i] / diag[i - 1];
+      diag[i] -= m * upper[i - 1];
+      rhs[i] -= m * rhs[i - 1];
+    }
+    for (std::size_t i = n; i-- > 0;)
+      rhs[i] = (rhs[i] - (i + 1 < n ? upper[i] * rhs[i + 1] : 0.0)) / diag[i];
+    for (std::size_t i = 0; i < n; ++i) image(pixels[i].first, pixels[i].second, c) = float(rhs[i]);
+  }
+}
+
+TEST(IsotropicDiffusion, MatchesLineByLineSolvesInDouble) {
+  for (const Size size : {Size{37, 23}, Size{23, 37}, Size{70, 70}, Size{1, 9}, Size{9, 1}}) {
+    const std::ptrdiff_t w = size.width, h = size.height;
+    const Image color = random_image(size, 3, 8);
+    Image coc = random_image(size, 1, 9);
+    const auto pixel_link = [&](std::ptrdiff_t x, std::ptrdiff_t y) {
+      const float u = coc(x, y, 0);
+      return u < 0.2f ? 0.0 : double(adi_beta_for_coc(20 * u));
+    };
+    Image expected = color;
+    const auto axis = [&](std::ptrdiff_t x, std::ptrdiff_t y, int dx, int dy) {
+      return 0.5 * std::min(pixel_link(x, y), pixel_link(x + dx, y + dy));
+    };
+    const auto diagonal = [&](std::ptrdiff_t x, std::ptrdiff_t y, int dx, int dy) {
+      return 0.25 * std::min({pixel_link(x, y), pixel_link(x + dx, y + dy), pixel_link(x + dx, y),
+                              pixel_link(x, y + dy)});
+    };
+    for (std::ptrdiff_t y = 0; y < h; ++y) solve_line_reference(expected, 0, y, 1, 0, axis);
+    for (std::ptrdiff_t x = 0; x < w; ++x) solve_line_reference(expected, x, 0, 0, 1, axis);
+    for (std::ptrdiff_t s = -(h - 1); s < w; ++s)  // x - y = s, down-right
+      solve_line_reference(expected, std::max<std::ptrdiff_t>(s, 0),
+                           std::max<std::ptrdiff_t>(-s, 0), 1, 1, diagonal);
+    for (std::ptrdiff_t s = 0; s < w + h - 1; ++s)  // x + y = s, down-left
+      solve_line_reference(expected, std::min(s, w - 1), s - std::min(s, w - 1), -1, 1, diagonal);
+    Image out;
+    diffuse_isotropic(out, color, coc.plane(0),
+                      [](float u) { return u < 0.2f ? 0.f : adi_beta_for_coc(20 * u); });
+    for (int c = 0; c < 3; ++c)
+      for (std::ptrdiff_t y = 0; y < h; ++y)
+        for (std::ptrdiff_t x = 0; x < w; ++x)
+          ASSERT_NEAR(out(x, y, c), expected(x, y, c), 2e-5f) << name(size) << " " << pixel(x, y);
+  }
+}
+
 }  // namespace
 }  // namespace tridiff::test
