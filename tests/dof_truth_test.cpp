@@ -4,6 +4,7 @@
 // the aperture sampler against a grid count of inside(), and the sRGB score's hand values.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <utility>
@@ -147,6 +148,36 @@ TEST(LensTruth, DeterministicWhateverTheThreadsAndRejectsBadSamples) {
               render_thin_lens(scene, 8, 8, {10, {}, 1, 0});
             }).argument,
             "samples");
+}
+
+// What the lamps scene is for, at 1920 wide (the depth map does not depend on the size): a
+// subject at the focus, a second slightly in front (CoC -2 to -6 px), a near post far more blurred
+// (CoC < -40 px) beside it in the image, many lamps far above 1 behind the focus, every |CoC| <=
+// 60 px (within the methods' clamp at 64).
+TEST(LampsScene, HasTheLayersItClaims) {
+  const std::ptrdiff_t width = 384, height = 216;
+  const Scene scene = lamps_scene(width, height, 2);
+  ThinLens lens = scene.lens;
+  lens.max_coc_px = 1e6f;
+  auto coc_1920 = [&](std::ptrdiff_t x, std::ptrdiff_t y) {
+    return coc_thin_lens(scene.depth(x, y, 0), lens, 1920);
+  };
+  std::ptrdiff_t in_focus = 0, slightly_near = 0, lamps = 0, post_next_to_subject = 0;
+  float largest = 0;
+  for (std::ptrdiff_t y = 0; y < height; ++y)
+    for (std::ptrdiff_t x = 0; x < width; ++x) {
+      const float c = coc_1920(x, y);
+      largest = std::max(largest, std::fabs(c));
+      in_focus += std::fabs(c) < 0.5f;
+      slightly_near += c <= -2 && c >= -6;
+      lamps += scene.color(x, y, 0) > 5 && c > 10;
+      if (x > 0 && c <= -2 && c >= -6 && coc_1920(x - 1, y) < -40) ++post_next_to_subject;
+    }
+  EXPECT_GT(in_focus, width * height / 20);
+  EXPECT_GT(slightly_near, width * height / 100);
+  EXPECT_GT(lamps, 100);
+  EXPECT_GT(post_next_to_subject, 10);
+  EXPECT_LE(largest, 60.f);
 }
 
 TEST(ApertureShape, ValidateNamesTheBadParameter) {

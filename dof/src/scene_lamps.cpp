@@ -38,8 +38,8 @@ void hit_facade(Vec3 origin, Vec3 dir, RayHit& hit) {
   const bool window = u > 0.3f && u < 0.7f && v > 0.25f && v < 0.75f;
   const float lit = hash(std::int32_t(column), std::int32_t(floor_row) + 101);
   const float grain = 0.7f + 0.3f * texture(p.x * 2, p.y * 2);
-  Vec3 c{0.03f * grain, 0.03f * grain, 0.045f * grain};
-  if (window && lit > 0.45f) c = (0.4f + 1.2f * lit) * Vec3{1.f, 0.7f, 0.35f};
+  Vec3 c{0.02f * grain, 0.02f * grain, 0.035f * grain};
+  if (window && lit > 0.45f) c = (0.1f + 0.5f * lit) * Vec3{1.f, 0.7f, 0.35f};
   hit = {t, c};
 }
 
@@ -53,21 +53,23 @@ void hit_ground(Vec3 origin, Vec3 dir, RayHit& hit) {
 }
 
 // One string of lamps across the street at depth z: bulbs every `spacing` metres, sagging in a
-// parabola, each a sphere of angular radius 0.0025 (about 0.9 px at 512 wide).
+// parabola from `end_height` (in units of z: the image's tan) at its ends by 0.04 z, each a
+// sphere of angular radius 0.0025 (about 0.9 px at 512 wide). The farther strings hang lower in
+// the image, the lowest behind the sign's top edge and all behind the post.
 struct LampString {
-  float z, top_y, sag, spacing;
+  float z, end_height, spacing;
   std::int32_t seed;
   float radius() const { return 0.0025f * z; }
   float half_width() const { return 0.5f * z; }  // beyond the frame's 0.36 z, blur included
   float height(float x) const {
     const float s = x / half_width();
-    return top_y - sag * (1 - s * s);
+    return z * (end_height - 0.04f * (1 - s * s));
   }
 };
 
 constexpr LampString kStrings[] = {
-    {6.f, 0.95f, 0.35f, 0.42f, 1}, {8.5f, 1.5f, 0.4f, 0.55f, 2}, {12.f, 1.9f, 0.6f, 0.7f, 3},
-    {17.f, 2.9f, 0.8f, 0.95f, 4},  {24.f, 3.6f, 1.2f, 1.25f, 5},
+    {6.f, 0.19f, 0.42f, 1},  {8.5f, 0.15f, 0.55f, 2},  {12.f, 0.115f, 0.7f, 3},
+    {17.f, 0.08f, 0.95f, 4}, {24.f, 0.045f, 1.25f, 5},
 };
 
 Vec3 lamp_color(std::int32_t index, std::int32_t seed) {
