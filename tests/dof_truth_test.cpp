@@ -86,6 +86,32 @@ TEST(LensTruth, BlurDiameterIsCocThinLensBehindAndInFrontOfTheFocus) {
   }
 }
 
+// Through a hexagon inscribed in the CoC disc the light spreads as the hexagon: the image of
+// aperture point (u, v) lies (u, v) |c| / 2 pixels off (mirrored behind the focus, which the
+// variance does not see), so the per-axis variance is (c / 2)^2 var_u + R^2 / 4 + 1 / 12, with
+// var_u the shape's, counted on a fine grid with inside().
+TEST(LensTruth, PolygonApertureSpreadsAsItsShape) {
+  const ThinLens lens = wide_open_lens();
+  constexpr std::ptrdiff_t kSize = 96;
+  constexpr float kLightRadiusPx = 3.f;
+  const ApertureShape hexagon{6, 10, 0};
+  double area = 0, second_moment = 0;
+  constexpr int kCount = 1000;
+  for (int j = 0; j < kCount; ++j)
+    for (int i = 0; i < kCount; ++i) {
+      const float u = -1 + 2 * (i + 0.5f) / kCount, v = -1 + 2 * (j + 0.5f) / kCount;
+      if (!inside(hexagon, u, v)) continue;
+      ++area;
+      second_moment += 0.5 * (double(u) * u + double(v) * v);
+    }
+  const float depth = 4.f, coc = coc_thin_lens(depth, lens, kSize);
+  const Image image = render_thin_lens(light_on_the_axis(lens, depth, kLightRadiusPx, kSize), kSize,
+                                       kSize, {1024, hexagon, 5, 2});
+  const double expected =
+      coc * coc / 4 * second_moment / area + kLightRadiusPx * kLightRadiusPx / 4 + 1.0 / 12;
+  EXPECT_NEAR(intensity_variance(image), expected, 0.015 * expected);
+}
+
 TEST(LensTruth, VanishingApertureIsThePinholeRender) {
   RayTracedScene scene = find_ray_traced_scene("procedural");
   scene.lens.f_number = 1e5f;  // an aperture of 0.5 um

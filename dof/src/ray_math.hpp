@@ -1,5 +1,5 @@
-// Vector arithmetic and procedural textures of the ray-traced scenes (scene.cpp,
-// scene_lamps.cpp). Library-internal.
+// Vector arithmetic, procedural textures and the tracers of the ray-traced scenes (scene.cpp,
+// scene_lamps.cpp), for the pinhole and the thin-lens renders. Library-internal.
 #pragma once
 
 #include <cmath>

@@ -37,8 +37,10 @@ const Sphere kSpheres[] = {
     {{3.4f, -0.2f, 11.f}, 0.9f, {0.8f, 0.75f, 0.6f}, 5.f},
 };
 
-// Every ray starts at `origin`: the pinhole's is 0, where these are the formulas of a ray from
-// the origin to the last bit (0 + x is x), so that the pinhole render is unchanged by the lens.
+// Every ray starts at `origin` (a point of the lens; the pinhole's is 0). With origin 0 these
+// are the former pinhole formulas value for value (0 + x is x); only where the compiler fuses
+// a multiply and an add differently does the colour move, by at most 6e-6 relative (measured
+// at 333 x 211; the depth is unchanged bit for bit).
 void hit_floor(Vec origin, Vec dir, Hit& hit) {
   if (dir.y >= 0) return;
   const float t = (kFloorY - origin.y) / dir.y;
