@@ -2,14 +2,17 @@
 // methods against it (tools/dof_truth_score.cpp, bench/bench_dof.cpp): rendered once per scene,
 // size, sample count and aperture under results/truth/, then read back.
 //
-// Files: <dir>/<scene>_<W>x<H>_<samples>_<aperture>.exr and a .txt beside it with the PSNR
-// between the truth's two halves (its noise). write_image stores OpenEXR as half floats (10-bit
+// Files: <dir>/<scene>_<W>x<H>_<samples>_<aperture>_<fingerprint>.exr and a .txt beside it with
+// the PSNR between the truth's two halves (its noise). The fingerprint hashes a tiny pinhole
+// render and the lens of the scene, so that a changed scene is rendered again, not read stale. write_image stores OpenEXR as half floats (10-bit
 // mantissa, relative step 2^-11); in the sRGB score that is ~80 dB, far below the truth's own
 // noise (the tool prints the measured round trip when it writes).
 #pragma once
 
+#include <bit>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -38,11 +41,33 @@ inline std::string aperture_tag(const ApertureShape& shape) {
   return tag;
 }
 
+// FNV-1a of the scene's lens and of its pinhole render at 32 x 18 (colour and depth bits).
+inline std::string scene_fingerprint(const std::string& name) {
+  const RayTracedScene traced = find_ray_traced_scene(name);
+  const Scene tiny = render_pinhole(traced, 32, 18, 1, 1);
+  std::uint64_t hash = 14695981039346656037ull;
+  auto add = [&](float value) {
+    hash = (hash ^ std::bit_cast<std::uint32_t>(value)) * 1099511628211ull;
+  };
+  const ThinLens& lens = traced.lens;
+  for (float value :
+       {lens.focal_length_mm, lens.f_number, lens.focus_distance_m, lens.sensor_width_mm})
+    add(value);
+  for (const Image* image : {&tiny.color, &tiny.depth})
+    for (int c = 0; c < image->channels(); ++c)
+      for (std::ptrdiff_t y = 0; y < image->height(); ++y)
+        for (std::ptrdiff_t x = 0; x < image->width(); ++x) add((*image)(x, y, c));
+  char text[17];
+  std::snprintf(text, sizeof text, "%08x", unsigned(hash ^ (hash >> 32)));
+  return text;
+}
+
 inline std::string truth_cache_path(const std::string& dir, const std::string& scene,
                                     std::ptrdiff_t width, std::ptrdiff_t height, int samples,
                                     const ApertureShape& aperture) {
   return dir + "/" + scene + "_" + std::to_string(width) + "x" + std::to_string(height) + "_" +
-         std::to_string(samples) + "_" + aperture_tag(aperture) + ".exr";
+         std::to_string(samples) + "_" + aperture_tag(aperture) + "_" + scene_fingerprint(scene) +
+         ".exr";
 }
 
 // sRGB PSNR of a against b over the whole frame (the regions do not matter here).
