@@ -29,6 +29,13 @@
 //                     per method and scene, and reported on the rows of every size: the
 //                     reference is slow, and the scenes are the same at every size (their CoC
 //                     in pixels does not scale, except `procedural`'s)
+//   psnr_vs_truth, ssim_vs_truth
+//                     the ray-traced scenes (procedural, lamps) only: score_against_truth()
+//                     (quality.hpp: sRGB PSNR / SSIM) of the method's output on the scene at
+//                     1024 x 576 against its thin-lens truth (truth.hpp) at 512 rays per pixel
+//                     (noise: ~48 dB procedural, ~44 dB lamps), 2 threads. The truth is read
+//                     from results/truth/ (tools/truth_cache.hpp) or rendered there once (about
+//                     25 s and 60 s on 2 cores); like the scatter errors, reported on every size
 // Cost guard: a method x scene x size whose one run is estimated to take more than
 // kMaxRunSeconds is skipped (an error row saying so): the estimate is the 1024^2 run's time if
 // it has been measured, else a 256^2 (if close to the limit, 512^2) probe's, times the pixel
@@ -55,9 +62,11 @@
 
 #include "tridiff/dof/method.hpp"
 #include "tridiff/dof/quality.hpp"
+#include "tridiff/dof/scene.hpp"
 #include "tridiff/dof/scenes.hpp"
 #include "tridiff/dof/tiles.hpp"
 #include "tridiff/image/copy.hpp"
+#include "truth_cache.hpp"
 
 namespace {
 
@@ -234,6 +243,33 @@ const DofError& error_vs_scatter(const DofMethod& method, const std::string& nam
   return errors[key] = dof_error(out, ref->second, s.color, s.coc.plane(0), 1.f);
 }
 
+// `method` against the thin-lens truth of the ray-traced scene `name` at kTruthWidth x
+// kTruthHeight, 2 threads; the truth from the file cache, both cached in memory.
+constexpr std::ptrdiff_t kTruthWidth = 1024, kTruthHeight = 576;
+constexpr int kTruthSamples = 512;
+bool has_truth(const std::string& name) {
+  for (std::string_view traced : ray_traced_scene_names())
+    if (traced == name) return true;
+  return false;
+}
+const TruthScore& score_vs_truth(const DofMethod& method, const std::string& name) {
+  static std::map<std::pair<std::string, std::string>, TruthScore> scores;
+  static std::map<std::string, Image> truths;
+  const auto key = std::pair{std::string(method.name), name};
+  if (auto it = scores.find(key); it != scores.end()) return it->second;
+  auto truth = truths.find(name);
+  if (truth == truths.end())
+    truth = truths
+                .emplace(name, tools::cached_lens_truth("results/truth", name, kTruthWidth,
+                                                        kTruthHeight, kTruthSamples, {}, 2)
+                                   .color)
+                .first;
+  const DofScene& s = scene(name, kTruthWidth, kTruthHeight).scene;
+  Image out;
+  run_once(method, s, 2, out);
+  return scores[key] = score_against_truth(out, truth->second, s.coc.plane(0));
+}
+
 // Times the method on a cached scene (focus_percent >= 0: the focus-fraction scene), after the
 // cost guard; errors against scatter unless it is a focus-fraction run.
 void bm_method(benchmark::State& state, const DofMethod& method, const std::string& name,
@@ -280,6 +316,10 @@ void bm_method(benchmark::State& state, const DofMethod& method, const std::stri
   state.counters["max_error_vs_scatter"] = e.max_abs;
   state.counters["in_focus_max"] = e.in_focus_max;
   state.counters["leakage_vs_scatter"] = e.leakage;
+  if (!has_truth(name)) return;
+  const TruthScore& truth = score_vs_truth(method, name);
+  state.counters["psnr_vs_truth"] = truth.psnr;
+  state.counters["ssim_vs_truth"] = truth.ssim;
 }
 
 // The focus-fraction scene diffused where it lies, out == color (see the file comment).

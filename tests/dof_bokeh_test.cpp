@@ -113,9 +113,9 @@ TEST(ApertureScatter, RotationRotatesTheSplat) {
       worst = std::max(worst, std::fabs(a - turned(kCentre + dy, kCentre - dx, 0)));
     }
   EXPECT_LT(worst, 1e-5f * largest);
-  // A vertex of the 90-degree pentagon points up (to smaller rows), a blade faces down.
-  EXPECT_GT(turned(kCentre, kCentre - 14, 0), 0.f);
-  EXPECT_EQ(turned(kCentre, kCentre + 14, 0), 0.f);
+  // Unturned, corner 0 of the pentagon points up (to smaller rows), a blade faces down.
+  EXPECT_GT(upright(kCentre, kCentre - 14, 0), 0.f);
+  EXPECT_EQ(upright(kCentre, kCentre + 14, 0), 0.f);
 }
 
 // Four blades at 45 degrees are the axis-aligned square (corners at (±11, ±11) of the

@@ -204,7 +204,7 @@ double fraction_of(const Image& coc, const std::function<bool(float)>& test) {
 }
 
 TEST(DofScenes, EverySceneAnySizeDeterministicFinite) {
-  ASSERT_EQ(dof_scenes().size(), 6u);
+  ASSERT_EQ(dof_scenes().size(), 7u);
   for (const DofSceneInfo& info : dof_scenes()) {
     EXPECT_FALSE(info.provokes.empty());
     for (auto [w, h] :

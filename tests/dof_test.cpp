@@ -1084,7 +1084,7 @@ TEST(DofOptionsHonoured, BadLensCharacterIsRefusedNamingTheOption) {
 TEST(ApertureShape, PolygonRimAndArea) {
   for (int blades : {3, 5, 6, 8}) {
     const ApertureShape shape{.blades = blades, .rotation_deg = 10, .roundness = 0};
-    const float vertex = 10.f * float(M_PI) / 180.f;
+    const float vertex = float(M_PI) / 2 + 10.f * float(M_PI) / 180.f;  // corner 0: up, turned
     EXPECT_NEAR(aperture_rim(shape, vertex), 1.f, 1e-5f) << blades;
     EXPECT_NEAR(aperture_rim(shape, vertex + float(M_PI) / float(blades)),
                 std::cos(float(M_PI) / float(blades)), 1e-5f)

@@ -19,6 +19,16 @@ void require_same_size(ConstPlane approx, const DoublePlane& exact) {
 
 // Mean SSIM of a and b (values in [0, 1]) with a Gaussian window of sigma 1.5.
 double mean_ssim(const DoublePlane& a, const DoublePlane& b) {
+  const DoublePlane map = ssim_map(a, b);
+  double sum = 0;
+  for (const double value : map.values) sum += value;
+  return sum / static_cast<double>(a.values.size());
+}
+
+}  // namespace
+
+DoublePlane ssim_map(const DoublePlane& a, const DoublePlane& b) {
+  if (a.width != b.width || a.height != b.height) throw InvalidArgument("b", "size differs from a");
   constexpr double kC1 = 0.01 * 0.01, kC2 = 0.03 * 0.03, kWindow = 1.5;
   DoublePlane aa(a.width, a.height), bb(a.width, a.height), ab(a.width, a.height);
   for (std::size_t i = 0; i < a.values.size(); ++i) {
@@ -31,18 +41,16 @@ double mean_ssim(const DoublePlane& a, const DoublePlane& b) {
   const DoublePlane m_aa = reference_gaussian(aa, kWindow, Border::replicate);
   const DoublePlane m_bb = reference_gaussian(bb, kWindow, Border::replicate);
   const DoublePlane m_ab = reference_gaussian(ab, kWindow, Border::replicate);
-  double sum = 0;
+  DoublePlane map(a.width, a.height);
   for (std::size_t i = 0; i < a.values.size(); ++i) {
     const double ma = mu_a.values[i], mb = mu_b.values[i];
     const double var_a = m_aa.values[i] - ma * ma, var_b = m_bb.values[i] - mb * mb;
     const double cov = m_ab.values[i] - ma * mb;
-    sum +=
+    map.values[i] =
         (2 * ma * mb + kC1) * (2 * cov + kC2) / ((ma * ma + mb * mb + kC1) * (var_a + var_b + kC2));
   }
-  return sum / static_cast<double>(a.values.size());
+  return map;
 }
-
-}  // namespace
 
 BlurError blur_error(ConstPlane approx, const DoublePlane& exact) {
   require_same_size(approx, exact);

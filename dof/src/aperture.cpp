@@ -5,6 +5,7 @@
 #include <numbers>
 #include <string>
 
+#include "aperture_boundary.hpp"
 #include "tridiff/image/image.hpp"  // InvalidArgument
 
 namespace tridiff {
@@ -39,10 +40,22 @@ void validate_aperture_image(const Image& kernel) {
 float aperture_rim(const ApertureShape& shape, float theta) {
   if (shape.is_circle()) return 1.f;
   const float sector = 2 * std::numbers::pi_v<float> / float(shape.blades);
-  const float from_vertex = theta - shape.rotation_deg * (std::numbers::pi_v<float> / 180);
-  const float phi = from_vertex - sector * std::floor(from_vertex / sector) - 0.5f * sector;
-  const float polygon = std::cos(0.5f * sector) / std::cos(phi);
-  return shape.roundness + (1 - shape.roundness) * polygon;
+  // Corner 0 straight up (+v), turned anticlockwise by the rotation.
+  const float corner =
+      std::numbers::pi_v<float> / 2 + shape.rotation_deg * (std::numbers::pi_v<float> / 180);
+  const float phi = theta - corner - sector * std::floor((theta - corner) / sector);
+  return aperture_radius_in_sector(shape, phi);
+}
+
+float aperture_radius(const ApertureShape& shape, float angle) {
+  return aperture_rim(shape, angle);
+}
+
+float aperture_radius_in_sector(const ApertureShape& shape, float phi) {
+  // The edge between two corners on the unit circle lies at the inradius cos(pi / N).
+  const float half = std::numbers::pi_v<float> / float(shape.blades);
+  const float polygon = std::cos(half) / std::cos(phi - half);
+  return (1 - shape.roundness) * polygon + shape.roundness;
 }
 
 bool inside(const ApertureShape& shape, float u, float v) {

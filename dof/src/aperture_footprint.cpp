@@ -33,8 +33,9 @@ ApertureFootprint::ApertureFootprint(const DofOptions& options) {
   const double sector = 2 * std::numbers::pi / blades;
   const double rotation = double(options.aperture.rotation_deg) * std::numbers::pi / 180;
   for (int k = 0; k < blades; ++k) {
-    // The middle of blade k lies half a sector past vertex k (aperture_rim); y is down.
-    const double middle = rotation + sector * (k + 0.5);
+    // The middle of blade k lies half a sector past corner k, corner 0 straight up
+    // (aperture_rim); y is down.
+    const double middle = std::numbers::pi / 2 + rotation + sector * (k + 0.5);
     normal_x_.push_back(std::cos(middle));
     normal_y_.push_back(-std::sin(middle));
   }

@@ -1,58 +1,30 @@
-// The procedural scene: a pinhole camera at the origin looking down +z over a checkered
-// floor, spheres at 2.5-11 m, lights on a brick wall at 18 m, a twig in front at 0.9 m.
+// The procedural scene (a camera at the origin looking down +z over a checkered floor, spheres
+// at 2.5-11 m, lights on a brick wall at 18 m, a twig in front at 0.9 m), the list of built-in
+// ray-traced scenes, and the pinhole render of any of them.
 #include "tridiff/dof/scene.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <string>
 
+#include "ray_math.hpp"
 #include "tridiff/threads.hpp"
 
 namespace tridiff {
 namespace {
 
-struct Vec {
-  float x, y, z;
-};
-Vec operator+(Vec a, Vec b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-Vec operator-(Vec a, Vec b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-Vec operator*(float s, Vec a) { return {s * a.x, s * a.y, s * a.z}; }
-float dot(Vec a, Vec b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-Vec normalize(Vec a) { return (1.f / std::sqrt(dot(a, a))) * a; }
-
-// Smooth value noise in [0, 1] from an integer hash, for texture variation.
-float hash(std::int32_t x, std::int32_t y) {
-  std::uint32_t h = std::uint32_t(x) * 374761393u + std::uint32_t(y) * 668265263u;
-  h = (h ^ (h >> 13)) * 1274126177u;
-  return float((h ^ (h >> 16)) & 0xffffff) / float(0xffffff);
-}
-float value_noise(float u, float v) {
-  const float fu = std::floor(u), fv = std::floor(v);
-  const auto iu = std::int32_t(fu), iv = std::int32_t(fv);
-  float su = u - fu, sv = v - fv;
-  su = su * su * (3 - 2 * su);
-  sv = sv * sv * (3 - 2 * sv);
-  const float top = hash(iu, iv) + su * (hash(iu + 1, iv) - hash(iu, iv));
-  const float bottom = hash(iu, iv + 1) + su * (hash(iu + 1, iv + 1) - hash(iu, iv + 1));
-  return top + sv * (bottom - top);
-}
-// Three octaves: a 1/f-like texture.
-float texture(float u, float v) {
-  return 0.5f * value_noise(u, v) + 0.3f * value_noise(2.1f * u, 2.1f * v) +
-         0.2f * value_noise(4.3f * u, 4.3f * v);
-}
+using scene_texture::texture;
+using Vec = Vec3;
+using Hit = RayHit;
 
 struct Sphere {
   Vec center;
   float radius;
   Vec albedo;
   float stripes;  // stripe frequency on the surface (0: plain)
-};
-
-struct Hit {
-  float t = std::numeric_limits<float>::infinity();
-  Vec color{0, 0, 0};
 };
 
 constexpr float kFloorY = -1.1f, kWallZ = 18.f;
@@ -65,21 +37,25 @@ const Sphere kSpheres[] = {
     {{3.4f, -0.2f, 11.f}, 0.9f, {0.8f, 0.75f, 0.6f}, 5.f},
 };
 
-void hit_floor(Vec dir, Hit& hit) {
+// Every ray starts at `origin` (a point of the lens; the pinhole's is 0). With origin 0 these
+// are the former pinhole formulas value for value (0 + x is x); only where the compiler fuses
+// a multiply and an add differently does the colour move, by at most 6e-6 relative (measured
+// at 333 x 211; the depth is unchanged bit for bit).
+void hit_floor(Vec origin, Vec dir, Hit& hit) {
   if (dir.y >= 0) return;
-  const float t = kFloorY / dir.y;
+  const float t = (kFloorY - origin.y) / dir.y;
   if (!(t < hit.t)) return;
-  const Vec p = t * dir;
+  const Vec p = origin + t * dir;
   const bool dark = (int(std::floor(p.x * 2)) + int(std::floor(p.z * 2))) & 1;
   const float grain = 0.6f + 0.4f * texture(p.x * 6, p.z * 6);
   const float base = dark ? 0.08f : 0.55f;
   hit = {t, {base * grain, base * grain * 0.95f, base * grain * 0.85f}};
 }
 
-void hit_wall(Vec dir, Hit& hit) {
-  const float t = kWallZ / dir.z;
+void hit_wall(Vec origin, Vec dir, Hit& hit) {
+  const float t = (kWallZ - origin.z) / dir.z;
   if (!(t < hit.t)) return;
-  const Vec p = t * dir;
+  const Vec p = origin + t * dir;
   // Bricks 0.5 x 0.25 m with mortar, rows offset by half a brick.
   const float row = std::floor(p.y * 4);
   const float u = p.x * 2 + (int(row) & 1) * 0.5f;
@@ -93,14 +69,15 @@ void hit_wall(Vec dir, Hit& hit) {
   hit = {t, c};
 }
 
-void hit_sphere(Vec dir, const Sphere& s, Hit& hit) {
-  const float b = dot(dir, s.center), c = dot(s.center, s.center) - s.radius * s.radius;
+void hit_sphere(Vec origin, Vec dir, const Sphere& s, Hit& hit) {
+  const Vec to_center = s.center - origin;
+  const float b = dot(dir, to_center), c = dot(to_center, to_center) - s.radius * s.radius;
   const float a = dot(dir, dir);
   const float disc = b * b - a * c;
   if (disc < 0) return;
   const float t = (b - std::sqrt(disc)) / a;
   if (!(t > 0 && t < hit.t)) return;
-  const Vec p = t * dir;
+  const Vec p = origin + t * dir;
   const Vec n = (1.f / s.radius) * (p - s.center);
   float shade = 0.15f + 0.85f * std::max(0.f, dot(n, kLight));
   if (s.stripes > 0) shade *= 0.55f + 0.45f * (std::sin(s.stripes * std::atan2(n.x, n.z)) > 0);
@@ -110,10 +87,10 @@ void hit_sphere(Vec dir, const Sphere& s, Hit& hit) {
 }
 
 // A twig close to the lens on the left: a slanted bar with leaves, the near-field object.
-void hit_twig(Vec dir, Hit& hit) {
-  const float z = 0.9f, t = z / dir.z;
+void hit_twig(Vec origin, Vec dir, Hit& hit) {
+  const float z = 0.9f, t = (z - origin.z) / dir.z;
   if (!(t < hit.t)) return;
-  const Vec p = t * dir;
+  const Vec p = origin + t * dir;
   const float along = p.y + 0.35f * p.x;  // slanted stem
   const float stem = std::abs(p.x + 0.14f - 0.12f * p.y);
   const bool on_stem = stem < 0.012f && p.y < 0.2f;
@@ -124,26 +101,51 @@ void hit_twig(Vec dir, Hit& hit) {
   hit = {t, on_leaf ? Vec{0.1f * vein, 0.35f * vein, 0.06f * vein} : Vec{0.2f, 0.12f, 0.05f}};
 }
 
-Hit trace(Vec dir) {
+}  // namespace
+
+RayHit trace_procedural(Vec3 origin, Vec3 direction) {
   Hit hit;
-  hit_wall(dir, hit);
-  hit_floor(dir, hit);
-  for (const Sphere& s : kSpheres) hit_sphere(dir, s, hit);
-  hit_twig(dir, hit);
+  hit_wall(origin, direction, hit);
+  hit_floor(origin, direction, hit);
+  for (const Sphere& s : kSpheres) hit_sphere(origin, direction, s, hit);
+  hit_twig(origin, direction, hit);
   return hit;
 }
 
+ThinLens procedural_lens() {
+  ThinLens lens;
+  lens.focus_distance_m = kSpheres[0].center.z - kSpheres[0].radius;
+  lens.f_number = 1.8f;  // a fast lens: a shallow depth of field worth looking at
+  return lens;
+}
+
+namespace {
+
+constexpr std::array<std::string_view, 2> kSceneNames{"procedural", "lamps"};
+
 }  // namespace
 
-Scene procedural_scene(std::ptrdiff_t width, std::ptrdiff_t height, int threads) {
+std::span<const std::string_view> ray_traced_scene_names() { return kSceneNames; }
+
+RayTracedScene find_ray_traced_scene(std::string_view name) {
+  if (name == "procedural") return {"procedural", procedural_lens(), trace_procedural};
+  if (name == "lamps") return {"lamps", lamps_lens(), trace_lamps};
+  throw InvalidArgument(
+      "scene", "unknown ray-traced scene '" + std::string(name) + "' (known: procedural, lamps)");
+}
+
+Scene render_pinhole(const RayTracedScene& traced, std::ptrdiff_t width, std::ptrdiff_t height,
+                     int supersample, int threads) {
+  if (supersample < 1)
+    throw InvalidArgument("supersample", "must be >= 1, got " + std::to_string(supersample));
   Scene scene;
   scene.color.reset(width, height, 3);
   scene.depth.reset(width, height, 1);
-  scene.lens = ThinLens{};
-  scene.lens.focus_distance_m = kSpheres[0].center.z - kSpheres[0].radius;
-  scene.lens.f_number = 1.8f;  // a fast lens: a shallow depth of field worth looking at
+  scene.lens = traced.lens;
   // Pinhole: a pixel spans sensor_width / (focal_length * width) on the z = 1 plane.
   const float pixel = scene.lens.sensor_width_mm / (scene.lens.focal_length_mm * float(width));
+  const float weight = 1.f / float(supersample * supersample);
+  const Vec origin{0, 0, 0};
   const int team = resolve_threads(threads);
 #pragma omp parallel for num_threads(team) schedule(dynamic, 8)
   for (std::ptrdiff_t y = 0; y < height; ++y)
@@ -153,14 +155,31 @@ Scene procedural_scene(std::ptrdiff_t width, std::ptrdiff_t height, int threads)
                    (0.5f * float(height) - float(y) - sy) * pixel, 1.f};
       };
       Vec sum{0, 0, 0};
-      for (float sy : {0.25f, 0.75f})
-        for (float sx : {0.25f, 0.75f}) sum = sum + trace(ray(sx, sy)).color;
-      scene.color(x, y, 0) = 0.25f * sum.x;
-      scene.color(x, y, 1) = 0.25f * sum.y;
-      scene.color(x, y, 2) = 0.25f * sum.z;
-      scene.depth(x, y, 0) = trace(ray(0.5f, 0.5f)).t;
+      for (int j = 0; j < supersample; ++j)
+        for (int i = 0; i < supersample; ++i) {
+          const float sx = (float(i) + 0.5f) / float(supersample);
+          const float sy = (float(j) + 0.5f) / float(supersample);
+          sum = sum + traced.trace(origin, ray(sx, sy)).color;
+        }
+      scene.color(x, y, 0) = weight * sum.x;
+      scene.color(x, y, 1) = weight * sum.y;
+      scene.color(x, y, 2) = weight * sum.z;
+      scene.depth(x, y, 0) = traced.trace(origin, ray(0.5f, 0.5f)).t;  // the ray's z is 1
     }
   return scene;
+}
+
+Scene ray_traced_scene(std::string_view name, std::ptrdiff_t width, std::ptrdiff_t height,
+                       int threads) {
+  return render_pinhole(find_ray_traced_scene(name), width, height, 2, threads);
+}
+
+Scene procedural_scene(std::ptrdiff_t width, std::ptrdiff_t height, int threads) {
+  return ray_traced_scene("procedural", width, height, threads);
+}
+
+Scene lamps_scene(std::ptrdiff_t width, std::ptrdiff_t height, int threads) {
+  return ray_traced_scene("lamps", width, height, threads);
 }
 
 }  // namespace tridiff

@@ -145,6 +145,9 @@ constexpr std::array kScenes{
     DofSceneInfo{"depth-gradient", "a tilted plane: CoC +28 px to -28 px, smoothly through 0"},
     DofSceneInfo{"highlights", "points of 5-20 on a dark blurred background: bokeh discs"},
     DofSceneInfo{"procedural", "the procedural scene with its thin-lens CoC: everything at once"},
+    DofSceneInfo{"lamps",
+                 "many lamps far behind the focus, a near post over a subject just in "
+                 "front of it: bokeh and the near layer's edge"},
 };
 
 void require_size(std::ptrdiff_t width, std::ptrdiff_t height) {
@@ -166,8 +169,8 @@ DofScene make_dof_scene(std::string_view name, std::ptrdiff_t width, std::ptrdif
   if (name == "large-coc") return paint(id, width, height, threads, large_coc);
   if (name == "depth-gradient") return paint(id, width, height, threads, depth_gradient);
   if (name == "highlights") return paint(id, width, height, threads, highlights);
-  if (name == "procedural") {
-    Scene scene = procedural_scene(width, height, threads);
+  if (name == "procedural" || name == "lamps") {
+    Scene scene = ray_traced_scene(name, width, height, threads);
     DofScene out{id, std::move(scene.color), Image(width, height, 1)};
     coc_thin_lens(out.coc.plane(0), scene.depth.plane(0), scene.lens, threads);
     return out;

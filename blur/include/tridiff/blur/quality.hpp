@@ -24,6 +24,10 @@ struct BlurError {
 
 BlurError blur_error(ConstPlane approx, const DoublePlane& exact);
 
+// SSIM of a and b (values in [0, 1]) at every pixel, as in BlurError::ssim (whose mean it is):
+// for scores over a part of the frame.
+DoublePlane ssim_map(const DoublePlane& a, const DoublePlane& b);
+
 // A blur of one plane, for the harness: out = blur(in).
 using PlaneBlur = std::function<void(Plane out, ConstPlane in)>;
 // One registered method at `options`, as a PlaneBlur.

@@ -24,9 +24,10 @@ void validate(const ApertureShape& shape);
 // image that is zero everywhere (no light would pass).
 void validate_aperture_image(const Image& kernel);
 
-// The aperture's rim at polar angle `theta` (radians), as a fraction of the circumscribed unit
-// circle: 1 for a circle; cos(pi/N) / cos(phi) for an N-bladed polygon with a vertex on the
-// circle, phi the angle from the nearest blade's middle; blended linearly with 1 by roundness.
+// The aperture's rim at polar angle `theta` (radians, anticlockwise from +u), as a fraction of
+// the circumscribed unit circle: 1 for a circle; for N blades a regular polygon inscribed in it
+// with corner 0 straight up (+v) turned anticlockwise by rotation_deg, cos(pi/N) / cos(phi) with
+// phi the angle from the nearest blade's middle; blended linearly with 1 by roundness.
 float aperture_rim(const ApertureShape& shape, float theta);
 
 // Whether (u, v), in units of the circumscribed circle's radius, lies inside the aperture.

@@ -51,4 +51,37 @@ struct DofRegions {
 DofRegions dof_regions(const Image& reference, const Image& input, ConstPlane coc,
                        float in_focus_coc_px);
 
+// A method's output against the thin-lens truth (truth.hpp), on what a display shows: linear
+// values clipped to [0, 1], then sRGB-encoded (the eye's error, not a highlight's), PSNR with
+// peak 1 (+inf when equal) and mean SSIM (as DofError::ssim, on the encoded values). Overall
+// and over three regions that partition the frame (TruthRegions); NaN for an empty region.
+struct TruthScore {
+  double psnr = 0, ssim = 0;
+  double psnr_in_focus = 0, ssim_in_focus = 0;
+  double psnr_defocused = 0, ssim_defocused = 0;
+  double psnr_edges = 0, ssim_edges = 0;
+  std::ptrdiff_t in_focus_pixels = 0, defocused_pixels = 0, edge_pixels = 0;
+};
+
+// One byte per pixel in raster order, each pixel in exactly one region. Edges: within
+// max(kTruthEdgeMarginPx, r + kTruthEdgeMarginPx) of a depth edge (Euclidean, pixel centres),
+// r the larger blur radius |c| / 2 of the edge's two sides; a depth edge lies between two
+// 4-neighbours whose CoC differ by more than kTruthEdgeJumpPx. There a blur crosses from one
+// surface over another, and what the near one hides decides the result: where a post-process
+// cannot see behind a foreground and leaks colour across. In focus: the other pixels with
+// |c| < 1 px; defocused: the rest.
+struct TruthRegions {
+  std::vector<unsigned char> in_focus, defocused, edges;
+};
+// A continuous surface's CoC changes by far less than a pixel from one pixel to the next
+// (except at grazing angles); a jump of more is another surface, an occlusion.
+inline constexpr float kTruthEdgeJumpPx = 1.f;
+// The SSIM window (sigma 1.5 px) and pixel sampling reach this far past the blur itself.
+inline constexpr float kTruthEdgeMarginPx = 3.f;
+TruthRegions truth_regions(ConstPlane coc);
+
+// `out` against `truth` (same size, 3 channels or more: the first 3 are scored), `coc` the
+// signed CoC map the methods were given (same size; InvalidArgument naming the argument).
+TruthScore score_against_truth(const Image& out, const Image& truth, ConstPlane coc);
+
 }  // namespace tridiff

@@ -6,7 +6,8 @@
 // Every scene is deterministic and has any size >= 1 x 1. Shapes and textures scale with the
 // frame (1024^2 and 3840 x 2160 show the same scene); the CoC amplitudes are a blur budget in
 // pixels that does not scale (as ThinLens::max_coc_px), so a method's work per pixel is the same
-// at every size. The exception is `procedural`, whose thin-lens CoC grows with the width.
+// at every size. The exceptions are `procedural` and `lamps` (the ray-traced scenes of
+// scene.hpp), whose thin-lens CoC grows with the width.
 #pragma once
 
 #include <cstddef>
@@ -30,11 +31,11 @@ struct DofSceneInfo {
 };
 
 // Every built-in scene, in a fixed order: foreground-blur, sharp-foreground, large-coc,
-// depth-gradient, highlights, procedural.
+// depth-gradient, highlights, procedural, lamps.
 std::span<const DofSceneInfo> dof_scenes();
 
 // The scene called `name` at width x height (InvalidArgument naming the known scenes, or the
-// size, otherwise). `threads` for the procedural scene's ray tracing (0: all cores).
+// size, otherwise). `threads` for the ray-traced scenes' tracing (0: all cores).
 DofScene make_dof_scene(std::string_view name, std::ptrdiff_t width, std::ptrdiff_t height,
                         int threads = 0);
 
