@@ -134,8 +134,18 @@ dof)
   expect_file "$d/r.json" "dof --report"
   json=$(cat "$d/r.json" 2>/dev/null)
   expect_in "$json" '"skipped_fraction"' "report"
-  expect_in "$json" '"method": "adi"' "report"
+  expect_in "$json" '"method": "bokeh"' "report"  # the default method
+  expect_in "$json" '"layered": true' "report"      # with its layers by default
   expect_in "$out" "skipped" "stdout summary"
+  l=$work/layers
+  mkdir -p "$l"
+  run dof --width 40 --height 30 -o "$l/nl.png" --no-layers --report "$l/nl.json"
+  expect_status 0 "dof --no-layers"
+  expect_in "$(cat "$l/nl.json" 2>/dev/null)" '"layered": false' "--no-layers report"
+  run dof --width 40 --height 30 -o "$l/both.png" --layers --no-layers
+  expect_status nonzero "--layers with --no-layers"
+  expect_in "$err" "--no-layers" "--layers with --no-layers"
+  [ -e "$l/both.png" ] && fail "--layers with --no-layers wrote an output"
   if command -v python3 >/dev/null; then
     python3 -c 'import json, sys
 r = json.load(open(sys.argv[1]))

@@ -169,11 +169,15 @@ void score_scene(const std::string& name, const Settings& settings) {
     print_row(std::string(method.name), result.seconds * 1e3,
               score_against_truth(result.out, truth.color, coc), vs_scatter(result.out));
   }
+  // Every method that has a near layer, with it.
   DofOptions layered = options;
   layered.layers = true;
-  const Run adi = run(find_dof_method("adi"), scene, layered);
-  print_row("adi layers=true", adi.seconds * 1e3, score_against_truth(adi.out, truth.color, coc),
-            vs_scatter(adi.out));
+  for (const DofMethod& method : dof_methods()) {
+    if (!method.honours_layers || method.name == "auto") continue;
+    const Run result = run(method, scene, layered);
+    print_row(std::string(method.name) + " layers=true", result.seconds * 1e3,
+              score_against_truth(result.out, truth.color, coc), vs_scatter(result.out));
+  }
 }
 
 }  // namespace
