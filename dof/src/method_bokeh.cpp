@@ -39,11 +39,8 @@
 #include "tridiff/dof/method.hpp"
 #include "aperture_footprint.hpp"
 #include "frame.hpp"
+#include "row_bands.hpp"
 #include "tiled_gather.hpp"  // Stages
-
-#ifdef _OPENMP
-#include <omp.h>
-#endif
 
 namespace tridiff {
 namespace dof_detail {
@@ -165,17 +162,11 @@ void splat_band(const DofFrame& frame, const Sprites& sprites, const ApertureFoo
 
 void splat_sprites(const DofFrame& frame, const Sprites& sprites,
                    const ApertureFootprint& footprint, Image& out) {
-  const std::ptrdiff_t height = frame.height();
-#pragma omp parallel num_threads(frame.threads())
-  {
-#ifdef _OPENMP
-    const int thread = omp_get_thread_num(), threads = omp_get_num_threads();
-#else
-    const int thread = 0, threads = 1;
-#endif
-    const std::ptrdiff_t band0 = height * thread / threads, band1 = height * (thread + 1) / threads;
-    if (band0 < band1) splat_band(frame, sprites, footprint, band0, band1, out);
-  }
+  dof_detail::for_each_row_band(frame.height(), frame.threads(),
+                                [&](std::ptrdiff_t band0, std::ptrdiff_t band1, int) {
+                                  if (band0 < band1)
+                                    splat_band(frame, sprites, footprint, band0, band1, out);
+                                });
 }
 
 }  // namespace

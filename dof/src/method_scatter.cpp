@@ -72,11 +72,8 @@
 #include "aperture_footprint.hpp"
 #include "stage_clock.hpp"
 #include "frame.hpp"
+#include "row_bands.hpp"
 #include "tiled_gather.hpp"  // Stages
-
-#ifdef _OPENMP
-#include <omp.h>
-#endif
 
 namespace tridiff {
 namespace {
@@ -432,31 +429,27 @@ void run_scatter(Image& out, const DofFrame& frame, const DofOptions& settings, 
   Image transmit(width, height, 1);
   for (std::ptrdiff_t y = 0; y < height; ++y) std::fill_n(transmit.plane(0).row(y), width, 1.f);
   const Plane trans = transmit.plane(0);
-#pragma omp parallel num_threads(frame.threads())
-  {
-#ifdef _OPENMP
-    const int thread = omp_get_thread_num(), threads = omp_get_num_threads();
-#else
-    const int thread = 0, threads = 1;
-#endif
-    const std::ptrdiff_t band0 = height * thread / threads, band1 = height * (thread + 1) / threads;
-    std::vector<double> lanes(static_cast<std::size_t>(channels));
-    for (std::size_t l = 0; l < layers.count() && band0 < band1; ++l) {
-      const Box box = footprint.is_circle()
-                          ? splat_band(frame, discs, layers, l, band0, band1, sums, lanes, boost,
-                                       [](double, float outer, std::ptrdiff_t dx,
-                                          std::ptrdiff_t dy) { return coverage(outer, dx, dy); })
-                          : splat_band(frame, discs, layers, l, band0, band1, sums, lanes, boost,
-                                       [&footprint](double diameter, float outer, std::ptrdiff_t dx,
-                                                    std::ptrdiff_t dy) {
-                                         return footprint.coverage(diameter, outer, dx, dy);
-                                       });
-      composite_box(box, sums, out, trans);
-      if (thread == 0 && settings.progress)
-        settings.progress(0.99 * double(l + 1) / double(layers.count()));
-    }
-    finish_band(frame, tiles, trans, band0, band1, out);
-  }
+  for_each_row_band(
+      height, frame.threads(), [&](std::ptrdiff_t band0, std::ptrdiff_t band1, int thread) {
+        std::vector<double> lanes(static_cast<std::size_t>(channels));
+        for (std::size_t l = 0; l < layers.count() && band0 < band1; ++l) {
+          const Box box =
+              footprint.is_circle()
+                  ? splat_band(frame, discs, layers, l, band0, band1, sums, lanes, boost,
+                               [](double, float outer, std::ptrdiff_t dx, std::ptrdiff_t dy) {
+                                 return coverage(outer, dx, dy);
+                               })
+                  : splat_band(frame, discs, layers, l, band0, band1, sums, lanes, boost,
+                               [&footprint](double diameter, float outer, std::ptrdiff_t dx,
+                                            std::ptrdiff_t dy) {
+                                 return footprint.coverage(diameter, outer, dx, dy);
+                               });
+          composite_box(box, sums, out, trans);
+          if (thread == 0 && settings.progress)
+            settings.progress(0.99 * double(l + 1) / double(layers.count()));
+        }
+        finish_band(frame, tiles, trans, band0, band1, out);
+      });
   stages.end("splat and composite");
   report.skipped_fraction = double(tiles.skipped) / double(width * height);
   report.notes = std::to_string(layers.count()) + " depth layers of 1 px CoC";
