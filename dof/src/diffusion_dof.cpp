@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include "tridiff/threads.hpp"
 #include "frame.hpp"
@@ -27,14 +28,50 @@ auto timed(DofReport& report, const char* name, Work&& work) {
   return work();
 }
 
-// Diffuses every plane of `image` in place with the conductance `beta` on every link (the
-// image border insulated). `any` is a plane of the image's size that the solve may read but
-// that this does not change (the conductance ignores it).
-void diffuse_uniform(Image& image, float beta, ConstPlane any, int threads) {
+// Diffuses every plane of `image` in place with the conductance `beta` on the links inside
+// `reach` (a plane of the image's size, > 0 where the fill may spread) and none elsewhere: the
+// solves skip the tiles out of reach.
+void diffuse_within(Image& image, float beta, ConstPlane reach, int threads) {
   DiffusionOptions options;
   options.threads = threads;
   diffuse_adi(
-      image, image, any, [beta](float) { return beta; }, options);
+      image, image, reach, [beta](float inside) { return inside > 0 ? beta : 0.f; }, options);
+}
+
+// 1 in the squares of kReachTile pixels that lie within `radius` pixels (a square's reach) of
+// a pixel of the near layer, 0 elsewhere: where the near layer's blur can reach, and so all
+// that the fills and the near blur need to solve. Outside it the near layer is empty and the
+// background keeps its own values.
+constexpr std::ptrdiff_t kReachTile = 32;
+Image near_reach(ConstPlane coc, const NearLayer& near, float radius, int threads) {
+  const std::ptrdiff_t width = coc.width(), height = coc.height();
+  const std::ptrdiff_t tiles_x = (width + kReachTile - 1) / kReachTile;
+  const std::ptrdiff_t tiles_y = (height + kReachTile - 1) / kReachTile;
+  std::vector<unsigned char> holds(std::size_t(tiles_x * tiles_y), 0);
+#pragma omp parallel for num_threads(resolve_threads(threads)) schedule(static)
+  for (std::ptrdiff_t ty = 0; ty < tiles_y; ++ty)
+    for (std::ptrdiff_t y = ty * kReachTile; y < std::min(height, (ty + 1) * kReachTile); ++y) {
+      const float* k = coc.row(y);
+      for (std::ptrdiff_t x = 0; x < width; ++x)
+        if (near.contains(k[x])) holds[std::size_t(ty * tiles_x + x / kReachTile)] = 1;
+    }
+  const auto grow = std::ptrdiff_t(std::ceil(radius / float(kReachTile)));
+  Image reach(width, height, 1);
+#pragma omp parallel for num_threads(resolve_threads(threads)) schedule(static)
+  for (std::ptrdiff_t ty = 0; ty < tiles_y; ++ty)
+    for (std::ptrdiff_t tx = 0; tx < tiles_x; ++tx) {
+      bool inside = false;
+      for (std::ptrdiff_t sy = std::max<std::ptrdiff_t>(0, ty - grow);
+           sy <= std::min(tiles_y - 1, ty + grow) && !inside; ++sy)
+        for (std::ptrdiff_t sx = std::max<std::ptrdiff_t>(0, tx - grow);
+             sx <= std::min(tiles_x - 1, tx + grow) && !inside; ++sx)
+          inside = holds[std::size_t(sy * tiles_x + sx)] != 0;
+      for (std::ptrdiff_t y = ty * kReachTile; y < std::min(height, (ty + 1) * kReachTile); ++y)
+        std::fill(reach.plane(0).row(y) + tx * kReachTile,
+                  reach.plane(0).row(y) + std::min(width, (tx + 1) * kReachTile),
+                  inside ? 1.f : 0.f);
+    }
+  return reach;
 }
 
 // Normalised diffusion ("push-pull" by heat) finishes here: `sum` is value * weight and
@@ -72,9 +109,14 @@ void layered_dof(Image& out, const DofFrame& frame, const DofOptions& settings, 
   const int channels = color.channels(), threads = settings.threads;
   const float fill_beta = adi_beta_for_coc(frame.max_abs_coc());
   const float in_focus = settings.in_focus_coc_px;
-  DiffusionReport diffusion;  // of the two blurs (the fills are always solved in full)
+  DiffusionReport diffusion;  // of the two blurs (the fills solve what the near layer reaches)
   NearLayer near;
-  timed(report, "near split", [&] { near = near_layer(coc, in_focus, threads); });
+  Image reach;
+  timed(report, "near split", [&] {
+    near = near_layer(coc, in_focus, threads);
+    reach = near_reach(coc, near, 0.5f * frame.max_abs_coc() + 2, threads);
+  });
+  const ConstPlane within = reach.plane(0);
   const auto in_near_field = [&near](float coc_px) { return near.contains(coc_px); };
 
   // Background: the near field cut out and its hole filled from around it, the colour and
@@ -95,8 +137,8 @@ void layered_dof(Image& out, const DofFrame& frame, const DofOptions& settings, 
         for (std::ptrdiff_t x = 0; x < width; ++x) to[x] = keep[x] * from[x];
       }
     });
-    diffuse_uniform(background, fill_beta, coc, threads);
-    diffuse_uniform(background_coc, fill_beta, coc, threads);
+    diffuse_within(background, fill_beta, within, threads);
+    diffuse_within(background_coc, fill_beta, within, threads);
     for_each_row(height, threads, [&](std::ptrdiff_t y) {
       const float* k = coc.row(y);
       float* filled_coc = background_coc.plane(0).row(y);
@@ -136,13 +178,16 @@ void layered_dof(Image& out, const DofFrame& frame, const DofOptions& settings, 
         for (std::ptrdiff_t x = 0; x < width; ++x) to[x] = inside[x] * from[x];
       }
     });
-    diffuse_uniform(near_coc, fill_beta, coc, threads);
+    diffuse_within(near_coc, fill_beta, within, threads);
+    // Out of reach the near layer is empty: no conductance, so the near blur skips it.
     for_each_row(height, threads, [&](std::ptrdiff_t y) {
       const float* k = coc.row(y);
+      const float* inside = within.row(y);
       float* value = near_coc.plane(0).row(y);
       const float* weight = near_coc.plane(1).row(y);
       for (std::ptrdiff_t x = 0; x < width; ++x)
-        value[x] = filled(in_near_field(k[x]), std::abs(k[x]), value[x], weight[x]);
+        value[x] =
+            inside[x] > 0 ? filled(in_near_field(k[x]), std::abs(k[x]), value[x], weight[x]) : 0.f;
     });
     diffusion += diffuse(near_layer, near_layer, near_coc.plane(0), in_focus, options);
   });
