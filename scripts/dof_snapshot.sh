@@ -27,7 +27,7 @@ run() {  # name, then the options
   sed -i '/"seconds"/d' "$name.json" 2>/dev/null || true
 }
 size=(--width 200 --height 120)
-for m in adi mpad ipf scatter poisson pyramid-layers sat sat-layers gems auto; do
+for m in adi mpad ipf scatter poisson pyramid-layers sat sat-layers gems bokeh auto; do
   run "$m-t1" "${size[@]}" --method "$m" --threads 1
   run "$m-t2" "${size[@]}" --method "$m" --threads 2
   run "$m-layers" "${size[@]}" --method "$m" --threads 2 --layers
