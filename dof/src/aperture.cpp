@@ -47,10 +47,6 @@ float aperture_rim(const ApertureShape& shape, float theta) {
   return aperture_radius_in_sector(shape, phi);
 }
 
-float aperture_radius(const ApertureShape& shape, float angle) {
-  return aperture_rim(shape, angle);
-}
-
 float aperture_radius_in_sector(const ApertureShape& shape, float phi) {
   // The edge between two corners on the unit circle lies at the inradius cos(pi / N).
   const float half = std::numbers::pi_v<float> / float(shape.blades);

@@ -83,14 +83,6 @@ inline float filled(bool known, float known_value, float sum, float weight) {
   return weight > 1e-30f ? sum / weight : known_value;
 }
 
-bool has_near_blur(ConstPlane coc, float in_focus_px) {
-  const FocusTest focus{in_focus_px};
-  for (std::ptrdiff_t y = 0; y < coc.height(); ++y)
-    for (std::ptrdiff_t x = 0; x < coc.width(); ++x)
-      if (focus.is_near(coc(x, y))) return true;
-  return false;
-}
-
 // Runs row(y) for every row, on `threads` threads.
 template <class Row>
 void for_each_row(std::ptrdiff_t height, int threads, Row&& row) {
@@ -101,8 +93,9 @@ void for_each_row(std::ptrdiff_t height, int threads, Row&& row) {
 // The layers are filled, blurred and composited in place in four buffers: a fresh full-frame
 // image costs its page faults (with the ten buffers of the first version, the layers of the
 // built-in scene at 1920 x 1080 on a 2-core VM took 268-584 ms, now typically 56).
-void layered_dof(Image& out, const DofFrame& frame, const DofOptions& settings, DofReport& report,
-                 const Diffuser& diffuse, const DiffusionOptions& options) {
+void layered_dof(Image& out, const DofFrame& frame, const NearLayer& near,
+                 const DofOptions& settings, DofReport& report, const Diffuser& diffuse,
+                 const DiffusionOptions& options) {
   const Image& color = frame.color();
   const ConstPlane coc = frame.coc();
   const std::ptrdiff_t width = color.width(), height = color.height();
@@ -110,12 +103,9 @@ void layered_dof(Image& out, const DofFrame& frame, const DofOptions& settings, 
   const float fill_beta = adi_beta_for_coc(frame.max_abs_coc());
   const float in_focus = settings.in_focus_coc_px;
   DiffusionReport diffusion;  // of the two blurs (the fills solve what the near layer reaches)
-  NearLayer near;
   Image reach;
-  timed(report, "near split", [&] {
-    near = near_layer(coc, in_focus, threads);
-    reach = near_reach(coc, near, 0.5f * frame.max_abs_coc() + 2, threads);
-  });
+  timed(report, "near split",
+        [&] { reach = near_reach(coc, near, 0.5f * frame.max_abs_coc() + 2, threads); });
   const ConstPlane within = reach.plane(0);
   const auto in_near_field = [&near](float coc_px) { return near.contains(coc_px); };
 
@@ -242,9 +232,13 @@ void diffusion_dof(Image& out, const DofFrame& frame, const DofOptions& settings
   options.threads = settings.threads;
   options.skip_inactive = settings.skip_in_focus;
   options.progress = settings.progress;
-  if (settings.layers && has_near_blur(frame.coc(), settings.in_focus_coc_px)) {
-    layered_dof(out, frame, settings, report, diffuse, options);
-    return;
+  if (settings.layers) {
+    const NearLayer near =
+        near_layer(frame.coc(), settings.in_focus_coc_px, resolve_threads(settings.threads));
+    if (!near.empty) {
+      layered_dof(out, frame, near, settings, report, diffuse, options);
+      return;
+    }
   }
   DiffusionReport diffusion;
   timed(report, "diffusion", [&] {

@@ -81,6 +81,7 @@ NearLayer near_layer(ConstPlane coc, float in_focus_coc_px, int threads) {
   const int team = resolve_threads(threads);
   NearLayer layer{FocusTest{in_focus_coc_px}, 0};  // the diffusion methods' threshold
   const auto [low, high] = near_range(coc, layer.focus, team);
+  layer.empty = !(low <= high);  // no near pixel leaves low at +inf
   layer.split_px = std::max(layer.focus.sharp_below, 0.f);
   if (!(high >= 2 * low)) return layer;  // no near field, or one depth: all of it
   const int edge = otsu_edge(near_histogram(coc, layer.focus, low, high, team));

@@ -22,6 +22,7 @@ namespace tridiff {
 struct NearLayer {
   FocusTest focus;     // near: c <= -focus.sharp_below
   float split_px = 0;  // the near layer: c <= -split_px (split_px >= focus.sharp_below)
+  bool empty = true;   // no pixel is near: there is nothing to blur as a layer
   bool contains(float coc_px) const { return focus.is_near(coc_px) && -coc_px >= split_px; }
 };
 
