@@ -35,7 +35,9 @@
 //                     1024 x 576 against its thin-lens truth (truth.hpp) at 512 rays per pixel
 //                     (noise: ~48 dB procedural, ~44 dB lamps), 2 threads. The truth is read
 //                     from results/truth/ (tools/truth_cache.hpp) or rendered there once (about
-//                     25 s and 60 s on 2 cores); like the scatter errors, reported on every size
+//                     25 s and 60 s on 2 cores); like the scatter errors, reported on every size.
+//                     TRIDIFF_BENCH_TRUTH_SAMPLES sets the rays per pixel (the quick notebook
+//                     run uses 64: 8x faster, its noise ~9 dB higher, still above every method)
 // Cost guard: a method x scene x size whose one run is estimated to take more than
 // kMaxRunSeconds is skipped (an error row saying so): the estimate is the 1024^2 run's time if
 // it has been measured, else a 256^2 (if close to the limit, 512^2) probe's, times the pixel
@@ -54,8 +56,10 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <map>
+#include <stdexcept>
 #include <string>
 #include <tuple>
 #include <utility>
@@ -246,7 +250,12 @@ const DofError& error_vs_scatter(const DofMethod& method, const std::string& nam
 // `method` against the thin-lens truth of the ray-traced scene `name` at kTruthWidth x
 // kTruthHeight, 2 threads; the truth from the file cache, both cached in memory.
 constexpr std::ptrdiff_t kTruthWidth = 1024, kTruthHeight = 576;
-constexpr int kTruthSamples = 512;
+int truth_samples() {
+  const char* value = std::getenv("TRIDIFF_BENCH_TRUTH_SAMPLES");
+  const int samples = value != nullptr ? std::atoi(value) : 512;
+  if (samples < 1) throw std::invalid_argument("TRIDIFF_BENCH_TRUTH_SAMPLES must be a positive count");
+  return samples;
+}
 bool has_truth(const std::string& name) {
   for (std::string_view traced : ray_traced_scene_names())
     if (traced == name) return true;
@@ -261,7 +270,7 @@ const TruthScore& score_vs_truth(const DofMethod& method, const std::string& nam
   if (truth == truths.end())
     truth = truths
                 .emplace(name, tools::cached_lens_truth("results/truth", name, kTruthWidth,
-                                                        kTruthHeight, kTruthSamples, {}, 2)
+                                                        kTruthHeight, truth_samples(), {}, 2)
                                    .color)
                 .first;
   const DofScene& s = scene(name, kTruthWidth, kTruthHeight).scene;
