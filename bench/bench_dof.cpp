@@ -253,7 +253,8 @@ constexpr std::ptrdiff_t kTruthWidth = 1024, kTruthHeight = 576;
 int truth_samples() {
   const char* value = std::getenv("TRIDIFF_BENCH_TRUTH_SAMPLES");
   const int samples = value != nullptr ? std::atoi(value) : 512;
-  if (samples < 1) throw std::invalid_argument("TRIDIFF_BENCH_TRUTH_SAMPLES must be a positive count");
+  if (samples < 1)
+    throw std::invalid_argument("TRIDIFF_BENCH_TRUTH_SAMPLES must be a positive count");
   return samples;
 }
 bool has_truth(const std::string& name) {

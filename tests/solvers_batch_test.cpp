@@ -107,7 +107,7 @@ std::ptrdiff_t first_difference(const std::vector<T>& p, const std::vector<T>& q
 // Marks the elements of storage that belong to the layout.
 std::vector<char> reached(const BatchLayout& layout) {
   std::vector<char> mask(storage_size(layout), 0);
-  for (std::ptrdiff_t s = 0; s < layout.count; ++s)
+  for (std::ptrdiff_t s = 0; s < layout.systems(); ++s)
     for (std::ptrdiff_t i = 0; i < layout.n; ++i) mask[layout.offset(s, i)] = 1;
   return mask;
 }
@@ -116,7 +116,7 @@ std::vector<char> reached(const BatchLayout& layout) {
 template <class T>
 std::vector<T> spread(const BatchLayout& layout, const std::vector<std::vector<T>>& parts) {
   std::vector<T> out(storage_size(layout), sentinel<T>());
-  for (std::ptrdiff_t s = 0; s < layout.count; ++s)
+  for (std::ptrdiff_t s = 0; s < layout.systems(); ++s)
     for (std::ptrdiff_t i = 0; i < layout.n; ++i) out[layout.offset(s, i)] = parts[s][i];
   return out;
 }
@@ -415,6 +415,63 @@ TYPED_TEST(SolverBatch, LongSystemSplitAcrossThreadsMatchesLongDoubleLu) {
 }
 
 // ---------------------------------------------------------------------------------------------
+// The lines of a 3-D grid along each axis: two batch dimensions (BatchLayout::grid_lines)
+
+struct Grid {
+  std::ptrdiff_t extent[3];
+  std::ptrdiff_t stride[3];
+  const char* order;
+};
+
+// Odd sizes, a dimension of 1 and one of 2, padding after every line and plane, and both the
+// C order (z fastest) and the Fortran order (x fastest), so each axis is in turn the
+// contiguous, the middle and the outer one.
+std::vector<Grid> test_grids() {
+  std::vector<Grid> grids;
+  const std::ptrdiff_t shapes[][3] = {{5, 7, 3}, {33, 2, 17}, {1, 4, 9}};
+  for (const auto& e : shapes) {
+    // x fastest, 2 elements of padding per line, 3 per plane
+    const std::ptrdiff_t fx1 = e[0] + 2, fx2 = fx1 * e[1] + 3;
+    grids.push_back({{e[0], e[1], e[2]}, {1, fx1, fx2}, "x fastest"});
+    // z fastest, 1 element of padding per line, 5 per plane
+    const std::ptrdiff_t cz1 = e[2] + 1, cz0 = cz1 * e[1] + 5;
+    grids.push_back({{e[0], e[1], e[2]}, {cz0, cz1, 1}, "z fastest"});
+  }
+  return grids;
+}
+
+TYPED_TEST(SolverBatch, EveryAxisOfAPaddedGridMatchesLongDoubleLu) {
+  using T = TypeParam;
+  for (const Grid& grid : test_grids())
+    for (int axis = 0; axis < 3; ++axis) {
+      const BatchLayout layout = BatchLayout::grid_lines(grid.extent, grid.stride, axis);
+      const auto systems = random_systems<T>(layout.n, layout.systems(), false);
+      const auto batch = make_batch(systems, layout);
+      const auto mask = reached(layout);
+      for (Method method : kAllMethods)
+        for (int threads : {1, 2}) {
+          SCOPED_TRACE(::testing::Message()
+                       << grid.extent[0] << " x " << grid.extent[1] << " x " << grid.extent[2]
+                       << ", " << grid.order << ", axis " << axis
+                       << ", method = " << to_string(method) << ", threads " << threads);
+          const auto x = solve_batch(batch, with(method, threads));
+          for (std::ptrdiff_t s = 0; s < layout.systems(); ++s) {
+            const auto xs = pick(x, layout, s);
+            const long double bound = backward_bound<T>(method, layout.n);
+            ASSERT_LE(backward_error(systems[s], xs), bound) << "system " << s;
+            ASSERT_LE(forward_error(xs, reference_solve(systems[s])),
+                      condition_bound(systems[s]) * bound)
+                << "system " << s;
+          }
+          for (std::size_t k = 0; k < x.size(); ++k)
+            if (!mask[k]) {
+              ASSERT_TRUE(same_bits(x[k], sentinel<T>())) << "padding element " << k;
+            }
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
 // The diffusion form
 
 // A batch of diffusion systems: beta and rhs per system, and the same in batch storage.
@@ -438,7 +495,7 @@ DiffusionBatch<T> make_diffusion(const BatchLayout& layout, bool periodic, real_
   DiffusionBatch<T> batch;
   batch.layout = layout;
   batch.periodic = periodic;
-  for (std::ptrdiff_t s = 0; s < layout.count; ++s) {
+  for (std::ptrdiff_t s = 0; s < layout.systems(); ++s) {
     std::vector<R> beta(layout.n);
     std::vector<T> rhs(layout.n);
     for (std::ptrdiff_t i = 0; i < layout.n; ++i) {
@@ -529,6 +586,33 @@ TYPED_TEST(SolverDiffusionBatch, MatchesExpandedSystemInEveryLayout) {
 
 TYPED_TEST(SolverDiffusionBatch, PeriodicMatchesExpandedSystemInEveryLayout) {
   check_diffusion_against_reference<TypeParam>(true);
+}
+
+// The diffusion form on every axis of the padded grids: one call per axis, as an ADI step on
+// a 3-D grid makes it.
+TYPED_TEST(SolverDiffusionBatch, EveryAxisOfAPaddedGridMatchesExpandedSystem) {
+  using T = TypeParam;
+  for (const Grid& grid : test_grids())
+    for (int axis = 0; axis < 3; ++axis)
+      for (bool periodic : {false, true}) {
+        const BatchLayout layout = BatchLayout::grid_lines(grid.extent, grid.stride, axis);
+        const auto batch = make_diffusion<T>(layout, periodic, 4, 31 * axis + layout.systems());
+        for (Method method : kAllMethods) {
+          SCOPED_TRACE(::testing::Message()
+                       << grid.extent[0] << " x " << grid.extent[1] << " x " << grid.extent[2]
+                       << ", " << grid.order << ", axis " << axis
+                       << ", method = " << to_string(method) << (periodic ? ", periodic" : ""));
+          const auto x = solve_diffusion_batch(batch, with(method));
+          for (std::ptrdiff_t s = 0; s < layout.systems(); ++s) {
+            const auto system = expanded<T>(batch.beta[s], batch.rhs[s], periodic);
+            const auto xs = pick(x, layout, s);
+            const long double bound = backward_bound<T>(method, layout.n);
+            ASSERT_LE(backward_error(system, widen(xs)), bound) << "system " << s;
+            ASSERT_LE(forward_error(xs, reference_solve(system)), condition_bound(system) * bound)
+                << "system " << s;
+          }
+        }
+      }
 }
 
 // Every column of the diffusion matrix sums to 1 (a_{i+1} + b_i + c_{i-1} = 1), so

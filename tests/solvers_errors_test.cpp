@@ -378,11 +378,20 @@ TYPED_TEST(SolverErrors, SelfOverlappingLayoutIsRejected) {
       {BatchLayout{kHuge, kHuge, kHuge, kHuge}, "layout"},
       {BatchLayout{kHuge, 2, 1, 3}, "layout"},
       {BatchLayout{2, kHuge, kHuge / 2, 1}, "layout"},
+      // The second batch dimension (the lines of a 3-D grid).
+      {BatchLayout{10, 3, 1, 10, 0, 30}, "outer_count"},
+      {BatchLayout{10, 3, 1, 10, 2, 29}, "outer_stride"},  // batches closer than 30 apart
+      {BatchLayout{10, 3, 1, 10, 2, 0}, "outer_stride"},
+      {BatchLayout{10, 3, 1, 10, 2, -30}, "outer_stride"},
+      {BatchLayout{10, 3, 4, 1, 4, 2}, "outer_stride"},  // outer batches interleave with systems
+      {BatchLayout{2, 2, 1, 2, kHuge, kHuge}, "layout"},
   };
   for (const Case& k : cases) {
     SCOPED_TRACE(::testing::Message()
                  << "n " << k.layout.n << " count " << k.layout.count << " row_stride "
-                 << k.layout.row_stride << " system_stride " << k.layout.system_stride);
+                 << k.layout.row_stride << " system_stride " << k.layout.system_stride
+                 << " outer_count " << k.layout.outer_count << " outer_stride "
+                 << k.layout.outer_stride);
     expect_invalid_argument([&] { validate_layout(k.layout); }, k.argument, -1, -1);
     expect_invalid_argument(
         [&] { solve(v.data(), v.data(), v.data(), v.data(), v.data(), k.layout); }, k.argument, -1,

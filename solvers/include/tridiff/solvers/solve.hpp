@@ -178,10 +178,14 @@ struct Scratch {
 };
 
 // Runs body(first_system, systems, scratch) over chunks of the batch on `threads` threads.
-// The exception of the lowest chunk is rethrown after the loop, so errors are deterministic.
+// A chunk never crosses from one outer batch to the next, so within it systems are
+// system_stride apart, as the lane kernels assume. The exception of the lowest chunk is
+// rethrown after the loop, so errors are deterministic.
 template <class T, class Body>
-void for_each_chunk(std::ptrdiff_t count, std::ptrdiff_t chunk, int threads, Body&& body) {
-  const std::ptrdiff_t chunks = (count + chunk - 1) / chunk;
+void for_each_chunk(const BatchLayout& layout, std::ptrdiff_t chunk, int threads, Body&& body) {
+  const std::ptrdiff_t count = layout.count;
+  const std::ptrdiff_t per_batch = (count + chunk - 1) / chunk;
+  const std::ptrdiff_t chunks = per_batch * layout.outer_count;
   std::exception_ptr error;
   std::ptrdiff_t error_chunk = std::numeric_limits<std::ptrdiff_t>::max();
   std::mutex guard;
@@ -191,8 +195,9 @@ void for_each_chunk(std::ptrdiff_t count, std::ptrdiff_t chunk, int threads, Bod
     static thread_local Scratch<T> scratch;
 #pragma omp for schedule(static)
     for (std::ptrdiff_t k = 0; k < chunks; ++k) {
+      const std::ptrdiff_t batch = k / per_batch, first = (k % per_batch) * chunk;
       try {
-        body(k * chunk, std::min(chunk, count - k * chunk), scratch);
+        body(batch * count + first, std::min(chunk, count - first), scratch);
       } catch (...) {
         std::lock_guard<std::mutex> lock(guard);
         if (k < error_chunk) {
@@ -467,7 +472,7 @@ SolveReport solve(const T* sub, const T* diag, const T* super, const T* rhs, T* 
   std::ptrdiff_t pivoted = 0;
   std::mutex count_guard;
 
-  if (layout.count == 1 && threads > 1 && fast == Method::Thomas && !options.periodic &&
+  if (layout.systems() == 1 && threads > 1 && fast == Method::Thomas && !options.periodic &&
       layout.n >= kPartitionedMinRows) {
     const auto view = system_view(sub, diag, super, rhs, layout, 0, false);
     if (!check || check_system_parallel(view, 0, method, method != Method::Auto, threads)) {
@@ -501,7 +506,7 @@ SolveReport solve(const T* sub, const T* diag, const T* super, const T* rhs, T* 
       pivoted += local_pivoted;
     }
   };
-  for_each_chunk<T>(layout.count, lanes ? W : 1, threads, solve_chunk);
+  for_each_chunk<T>(layout, lanes ? W : 1, threads, solve_chunk);
   return {fast, pivoted};
 }
 
@@ -570,7 +575,7 @@ SolveReport solve_diffusion(const real_t<T>* beta, const T* rhs, T* x, const Bat
                 options.hybrid_pcr_below, scratch.work, s);
     }
   };
-  for_each_chunk<T>(layout.count, lanes ? W : 1, threads, solve_chunk);
+  for_each_chunk<T>(layout, lanes ? W : 1, threads, solve_chunk);
   return {fast, 0};
 }
 
