@@ -8,7 +8,8 @@
 // Names: BM_solvers_<method>/<scalar>/<form>/<shape>/threads:<t>/real_time, where <method> is
 // auto, thomas, cr, pcr, cr-pcr, pivoting (the library's names) or lapack_gtsv; <form> is diffusion, general, or
 // general_unchecked (Thomas without the dominance check); <shape> is <layout>:<systems>x<n>:
-// rows:4096x4096, columns:4096x4096, single:1x16777216, rows:1048576x16. For example
+// rows:4096x4096, columns:4096x4096, single:1x16777216, rows:1048576x16, and for the lines of a
+// 256^3 grid along x, y and z (diffusion form, Thomas) grid-x:65536x256 and so on. For example
 //   BM_solvers_thomas/float/diffusion/columns:4096x4096/threads:2/real_time
 //   BM_solvers_lapack_gtsv/float/general/rows:4096x4096/threads:2/real_time
 //   BM_solvers_stream_triad/float/array:67108864/threads:2/real_time
@@ -492,6 +493,41 @@ void bm_lapack_gtsv(benchmark::State& state, Shape shape, int threads) {
 }
 
 // ---------------------------------------------------------------------------------------------
+// The lines of a 3-D grid: the problem's arrays as a 256^3 grid (x fastest), the diffusion form
+// solved along one axis in one call (BatchLayout::grid_lines), as an ADI step on a 3-D grid
+// does. Axis x is the rows layout, y the columns of each xy plane, z the columns of the whole
+// grid (the systems 256 elements apart in two batch dimensions, x then y).
+
+constexpr ptrdiff_t kGridSide = 256;
+static_assert(kGridSide * kGridSide * kGridSide == kElements, "the grid reuses the problem");
+
+BatchLayout grid_layout(int axis) {
+  const ptrdiff_t extent[3] = {kGridSide, kGridSide, kGridSide};
+  const ptrdiff_t stride[3] = {1, kGridSide, kGridSide * kGridSide};
+  return BatchLayout::grid_lines(extent, stride, axis);
+}
+
+template <class T>
+void bm_grid_diffusion(benchmark::State& state, int axis, int threads) {
+  Problem<T>& p = problem<T>();
+  const BatchLayout layout = grid_layout(axis);
+  triad_bytes_per_second(threads);  // measured before timing, not in the middle of it
+  tridiff::SolveOptions options;
+  options.threads = threads;
+  try {
+    for (auto _ : state) {
+      solve_diffusion(p.beta.data(), p.rhs.data(), p.x.data(), layout, options);
+      benchmark::ClobberMemory();
+    }
+  } catch (const std::exception& error) {
+    return state.SkipWithError(error.what());
+  }
+  check_solution(state, p, layout);
+  set_counters(state, 3.0 * sizeof(T) * kElements, double(layout.systems()), double(kElements),
+               threads);
+}
+
+// ---------------------------------------------------------------------------------------------
 // Registration
 
 constexpr int kThreadCounts[] = {1, 2};
@@ -560,6 +596,15 @@ void register_all() {
   }
   register_solvers<float>("float");
   register_solvers<double>("double");
+  for (int axis = 0; axis < 3; ++axis)
+    for (int threads : kThreadCounts) {
+      const std::string shape = std::string("grid-") + "xyz"[axis] + ":" +
+                                std::to_string(kGridSide * kGridSide) + "x" +
+                                std::to_string(kGridSide);
+      finish(benchmark::RegisterBenchmark(
+          join({"BM_solvers_thomas", "float", "diffusion", shape, threads_arg(threads)}).c_str(),
+          bm_grid_diffusion<float>, axis, threads));
+    }
 }
 
 }  // namespace
