@@ -495,23 +495,25 @@ def plot_dof_error_vs_time(rows, size="1024x1024"):
     return fig
 
 
-def plot_dof_scenes(rows, size="1024x1024", threads=2):
-    """PSNR against the scatter reference against time, one panel per built-in scene (each made
-    to provoke one artifact), every method a point, the Pareto frontier (no method both faster
-    and more accurate) joined. The reference itself is left out (its PSNR is infinite)."""
+def plot_dof_scenes(rows, size="1024x1024", threads=2, score="psnr_vs_scatter",
+                    reference="scatter"):
+    """A PSNR (`score`: against the scatter reference, or against the thin-lens truth) against
+    time, one panel per built-in scene that has it, every method a point, the Pareto frontier
+    (no method both faster and more accurate) joined. The `reference` method itself is left out
+    (its PSNR against itself is infinite)."""
     sel = [r for r in rows if r["kind"] == "method" and r["size"] == size
-           and r["threads"] == threads and r["method"] != "scatter"
-           and np.isfinite(r.get("psnr_vs_scatter", np.nan))]
+           and r["threads"] == threads and r["method"] != reference
+           and np.isfinite(r.get(score, np.nan))]
     scenes = sorted({r["scene"] for r in sel})
     colors = method_colors({r["method"] for r in sel})
-    columns = 3
+    columns = min(3, len(scenes))
     fig, axes = plt.subplots(-(-len(scenes) // columns), columns, figsize=(4.2 * columns,
                              3.2 * -(-len(scenes) // columns)), squeeze=False)
     for ax in axes.flat[len(scenes):]:
         ax.axis("off")
+    against = score.removeprefix("psnr_vs_")
     for ax, scene in zip(axes.flat, scenes):
-        pts = sorted((r["ms"], r["psnr_vs_scatter"], r["method"]) for r in sel
-                     if r["scene"] == scene)
+        pts = sorted((r["ms"], r[score], r["method"]) for r in sel if r["scene"] == scene)
         for ms, psnr, m in pts:
             ax.plot(ms, psnr, "o", color=colors[m])
             ax.annotate(m, (ms, psnr), fontsize=6, xytext=(3, 2), textcoords="offset points")
@@ -521,8 +523,9 @@ def plot_dof_scenes(rows, size="1024x1024", threads=2):
                 frontier.append((ms, psnr))
                 best = psnr
         ax.plot(*zip(*frontier), "-", color="black", lw=0.8)
-        ax.set(xscale="log", title=scene, xlabel="time (ms)", ylabel="PSNR vs scatter (dB)")
-    fig.suptitle(f"Depth of field per scene: error against time ({size}, {threads} threads)")
+        ax.set(xscale="log", title=scene, xlabel="time (ms)", ylabel=f"PSNR vs {against} (dB)")
+    fig.suptitle(f"Depth of field per scene: error against {against} and time "
+                 f"({size}, {threads} threads)")
     fig.tight_layout()
     return fig
 
