@@ -71,12 +71,17 @@ struct DiffusionRows {
   R flaw(std::ptrdiff_t i, int l) const { return link(i, l) < 0 ? R(1) : R(0); }
 };
 
-// The reduction of a slab of m >= 1 rows, for W lanes. Afterwards (results at i * pitch + l)
-//   row 0:       a'_0 x_{-1} + x_0 + c'_0 x_{m-1} = d'_0     (x_{-1}: the previous rank's last)
-//   row m-1:     a'   x_0    + x_{m-1} + c' x_m  = d'         (x_m: the next rank's first)
-//   rows between: a'_i x_0 + x_i + c'_i x_{m-1} = d'_i
-// (with m = 1 the one row reads a' x_{-1} + x_0 + c' x_1 = d'; with m = 2 both rows are only
-// normalised). probe[l] stays 0 unless a pivot vanished or a value is not finite in lane l.
+// The reduction of a slab of m >= 1 rows, for W lanes. The forward sweep leaves (results at
+// i * pitch + l)
+//   row i >= 1:  a'_i x_0 + x_i + c'_i x_{i+1} = d'_i     (x_m: the next rank's first unknown)
+// and a backward sweep, which only reads them (it carries row i + 1 in registers), expresses
+// row 1 through x_0 and x_{m-1} to eliminate x_1 from row 0, which then reads
+//   row 0:       a'_0 x_{-1} + x_0 + c'_0 x_{m-1} = d'_0  (x_{-1}: the previous rank's last)
+// Rows 0 and m-1 are this slab's two rows of the reduced system (with m = 1, the one row reads
+// a' x_{-1} + x_0 + c' x_1 = d'; with m = 2 both rows are only normalised). Keeping the forward
+// form of the other rows, and finishing by back substitution (finish_lanes), saves the stores
+// of a backward sweep that rewrites every row (as partitioned.hpp does).
+// probe[l] stays 0 unless a pivot vanished or a value is not finite in lane l.
 template <class T, int W, class Rows>
 void reduce_lanes(std::ptrdiff_t m, const Rows& rows, T* dp, T* ap, T* cp, std::ptrdiff_t pitch,
                   real_t<T>* probe) {
@@ -119,29 +124,34 @@ void reduce_lanes(std::ptrdiff_t m, const Rows& rows, T* dp, T* ap, T* cp, std::
       probe[l] += (vanished ? R(1) : R(0)) + magnitude(d[l] + a[l] + c[l]) * 0 + rows.flaw(i, l);
     }
   }
-  // Backward: rows m-3 .. 1 drop x_{i+1} for x_{m-1}, using the row below (already reduced).
+  if (m < 3) return;
+  // Backward, rows m-3 .. 1: row i + 1 through x_0 and x_{m-1} (row m-2 already reads so).
+  T below_d[W], below_a[W], below_c[W];
+  for (int l = 0; l < W; ++l) {
+    below_d[l] = dp[(m - 2) * pitch + l];
+    below_a[l] = ap[(m - 2) * pitch + l];
+    below_c[l] = cp[(m - 2) * pitch + l];
+  }
   for (std::ptrdiff_t i = m - 3; i >= 1; --i) {
-    T* d = dp + i * pitch;
-    T* a = ap + i * pitch;
-    T* c = cp + i * pitch;
+    const T* d = dp + i * pitch;
+    const T* a = ap + i * pitch;
+    const T* c = cp + i * pitch;
 #pragma omp simd
     for (int l = 0; l < W; ++l) {
-      const T coupling = c[l];
-      d[l] -= coupling * d[l + pitch];
-      a[l] -= coupling * a[l + pitch];
-      c[l] = -coupling * c[l + pitch];
+      below_d[l] = d[l] - c[l] * below_d[l];
+      below_a[l] = a[l] - c[l] * below_a[l];
+      below_c[l] = -c[l] * below_c[l];
     }
   }
-  if (m < 3) return;
-    // Row 0 drops x_1 for x_{m-1}: its own pivot.
+  // Row 0 drops x_1 for x_{m-1}: its own pivot.
 #pragma omp simd
   for (int l = 0; l < W; ++l) {
-    const T coupling = cp[l], product = coupling * ap[pitch + l];
+    const T coupling = cp[l], product = coupling * below_a[l];
     const T pivot = T(1) - product;
     const T inverse = T(1) / pivot;
-    dp[l] = (dp[l] - coupling * dp[pitch + l]) * inverse;
+    dp[l] = (dp[l] - coupling * below_d[l]) * inverse;
     ap[l] *= inverse;
-    cp[l] = -coupling * cp[pitch + l] * inverse;
+    cp[l] = -coupling * below_c[l] * inverse;
     const bool vanished = !(magnitude(pivot) > tolerance * (1 + magnitude(product)));
     probe[l] += (vanished ? R(1) : R(0)) + magnitude(dp[l] + ap[l] + cp[l]) * 0;
   }
@@ -164,25 +174,28 @@ std::ptrdiff_t first_vanishing_pivot(std::ptrdiff_t m, const Rows& rows) {
 }
 
 // The finish: x_0 and x_{m-1} are the boundary unknowns (first[l], last[l]); the rows between
-// follow from them. `store(i, l, value)` writes the solution; probe[l] stays 0 if it is finite.
+// follow by back substitution in their forward form, x_i = d'_i - a'_i x_0 - c'_i x_{i+1}.
+// `store(i, l, value)` writes the solution; probe[l] stays 0 if it is finite.
 template <class T, int W, class Store>
 void finish_lanes(std::ptrdiff_t m, const T* dp, const T* ap, const T* cp, std::ptrdiff_t pitch,
                   const T* first, const T* last, Store&& store, real_t<T>* probe) {
+  T below[W];
 #pragma omp simd
   for (int l = 0; l < W; ++l) {
     store(0, l, first[l]);
     store(m - 1, l, last[l]);
+    below[l] = last[l];
     probe[l] += magnitude(first[l] + last[l]) * 0;
   }
-  for (std::ptrdiff_t i = 1; i + 1 < m; ++i) {
+  for (std::ptrdiff_t i = m - 2; i >= 1; --i) {
     const T* d = dp + i * pitch;
     const T* a = ap + i * pitch;
     const T* c = cp + i * pitch;
 #pragma omp simd
     for (int l = 0; l < W; ++l) {
-      const T value = d[l] - a[l] * first[l] - c[l] * last[l];
-      store(i, l, value);
-      probe[l] += magnitude(value) * 0;
+      below[l] = d[l] - a[l] * first[l] - c[l] * below[l];
+      store(i, l, below[l]);
+      probe[l] += magnitude(below[l]) * 0;
     }
   }
 }
