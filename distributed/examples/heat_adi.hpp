@@ -3,8 +3,9 @@
 // 2-D: Peaceman–Rachford; 3-D: Douglas (1962). Both second order in space and time.
 // Solves along the axes inside a slab use tridiff::solve; along the cut axis either
 // tridiff::distributed::solve (the systems cross ranks) or a transpose that makes that axis
-// local for the solve and back (the two are compared by heat_adi.cpp --compare; the first is
-// the default, see docs/distributed.md for why).
+// local for the solve and back (compared by heat_adi.cpp --compare: on this machine, 1 to 4
+// ranks in shared memory, the transpose is 1.3-1.5x faster and the program's default; the
+// cost model of docs/distributed.md says where the distributed solve wins).
 #pragma once
 
 #include <mpi.h>
