@@ -17,6 +17,7 @@ packages=(
   libopencv-dev             # benchmarks only: cv::GaussianBlur as the blur yardstick
   libopenimageio-dev        # image reading and writing
   openimageio-tools         # Debian 12: OpenImageIO's CMake config fails without the tools
+  libopenmpi-dev openmpi-bin  # distributed/: solves and ADI across MPI ranks, and mpirun
 )
 # The notebooks (notebooks/*.ipynb) run on Debian's Python: no other package index is needed.
 notebook_packages=(

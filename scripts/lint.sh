@@ -6,7 +6,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 python3 - <<'PY'
 import pathlib, re, sys
-folders = ["solvers", "image", "diffusion", "blur", "dof", "bench", "tools", "tests", "fuzz"]
+folders = ["solvers", "image", "diffusion", "blur", "dof", "bench", "tools", "tests", "fuzz", "distributed"]
 bad = []
 for folder in folders:
     for path in sorted(pathlib.Path(folder).rglob("*")):
