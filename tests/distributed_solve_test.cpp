@@ -455,6 +455,23 @@ TYPED_TEST(DistributedSolve, EmptySlabOnOneRankIsRefusedOnEveryRank) {
             "n");
 }
 
+// A second batch dimension (BatchLayout::outer_count, the lines of a 3-D grid) is not
+// supported across ranks: refused on every rank, naming it, even when one rank alone asks.
+TYPED_TEST(DistributedSolve, SecondBatchDimensionIsRefusedOnEveryRank) {
+  using T = TypeParam;
+  EXPECT_EQ(refused_argument<T>([](Setup<T>& s) {
+              BatchLayout layout = s.slab.layout;
+              if (s.world.rank == 0) {  // the same systems, seen as one outer batch of them
+                layout.outer_count = 2;
+                layout.count = 1;
+                layout.outer_stride = s.slab.layout.system_stride;
+              }
+              tridiff::distributed::solve(s.slab.a.data(), s.slab.b.data(), s.slab.c.data(),
+                                          s.slab.d.data(), s.slab.x.data(), layout, MPI_COMM_WORLD);
+            }),
+            "outer_count");
+}
+
 TYPED_TEST(DistributedSolve, ScalarTypesThatDisagreeAreRefusedOnEveryRank) {
   using T = TypeParam;
   if (World().size == 1) GTEST_SKIP() << "needs two ranks";
