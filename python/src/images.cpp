@@ -238,6 +238,7 @@ py::list dof_method_list() {
     row["summary"] = std::string(method.summary);
     row["blurs_foreground"] = method.blurs_foreground;
     row["honours_layers"] = method.honours_layers;
+    row["keeps_sharp"] = method.keeps_sharp;
     row["cost"] = std::string(method.cost);
     methods.append(row);
   }
@@ -261,7 +262,8 @@ void bind_images(py::module_& module) {
              kDofDoc);
   module.def("_dof_methods", &dof_method_list,
              "Every registered depth-of-field method as a dict: name, summary, blurs_foreground, "
-             "honours_layers, cost.");
+             "honours_layers, keeps_sharp (a sharp pixel no nearer blur covers keeps its value bit for bit), "
+             "cost.");
 }
 
 }  // namespace tridiff::python

@@ -34,7 +34,8 @@ def blur_methods():
 
 def dof_methods():
     """Every registered depth-of-field method, as a list of dicts: name, summary,
-    blurs_foreground, honours_layers, cost."""
+    blurs_foreground, honours_layers, keeps_sharp (a sharp pixel that no nearer blur covers
+    keeps its value bit for bit), cost."""
     return _tridiff._dof_methods()
 
 
