@@ -17,6 +17,8 @@ packages=(
   libopencv-dev             # benchmarks only: cv::GaussianBlur as the blur yardstick
   libopenimageio-dev        # image reading and writing
   openimageio-tools         # Debian 12: OpenImageIO's CMake config fails without the tools
+  pybind11-dev python3-dev  # the Python module (python/), built for Debian's /usr/bin/python3
+  python3-numpy python3-scipy python3-pytest  # its tests: scipy is the reference
 )
 # The notebooks (notebooks/*.ipynb) run on Debian's Python: no other package index is needed.
 notebook_packages=(

@@ -24,8 +24,7 @@ std::vector<std::ptrdiff_t> shape_of(const py::array& array) {
 
 std::string shape_text(const std::vector<std::ptrdiff_t>& shape) {
   std::string text = "(";
-  for (std::size_t k = 0; k < shape.size(); ++k)
-    text += (k ? ", " : "") + std::to_string(shape[k]);
+  for (std::size_t k = 0; k < shape.size(); ++k) text += (k ? ", " : "") + std::to_string(shape[k]);
   return text + (shape.size() == 1 ? ",)" : ")");
 }
 

@@ -55,10 +55,10 @@ void set_error(py::handle type, const std::string& message, const std::string& a
 void set_invalid_argument(const InvalidArgument& error, const ErrorContext& context) {
   const std::string argument = renamed(error.argument(), context);
   py::object system = system_tuple(error.system(), context);
-  set_error(PyExc_ValueError,
-            "tridiff: " + where(argument, system, error.row()) + ": " +
-                renamed(error.message(), context),
-            argument, system, error.row());
+  set_error(
+      PyExc_ValueError,
+      "tridiff: " + where(argument, system, error.row()) + ": " + renamed(error.message(), context),
+      argument, system, error.row());
 }
 
 void set_numerical_error(const NumericalError& error, const ErrorContext& context) {
@@ -71,8 +71,8 @@ void set_numerical_error(const NumericalError& error, const ErrorContext& contex
   py::object system = system_tuple(error.system(), context);
   const std::string location = where("", system, error.row());
   set_error(lin_alg_error,
-            "tridiff: " + (location.empty() ? "" : location + ": ") + renamed(message, context),
-            "", system, error.row());
+            "tridiff: " + (location.empty() ? "" : location + ": ") + renamed(message, context), "",
+            system, error.row());
 }
 
 }  // namespace

@@ -83,8 +83,9 @@ Image planar_image(const ImageArray& image, int threads) {
 
 // A new float32 array height x width [x channels] for `planar`'s pixels (with the GIL).
 py::array new_interleaved(const Image& planar, bool channel_axis) {
-  if (channel_axis) return py::array_t<float>({planar.height(), planar.width(),
-                                               static_cast<std::ptrdiff_t>(planar.channels())});
+  if (channel_axis)
+    return py::array_t<float>(
+        {planar.height(), planar.width(), static_cast<std::ptrdiff_t>(planar.channels())});
   return py::array_t<float>({planar.height(), planar.width()});
 }
 
@@ -104,8 +105,8 @@ void to_interleaved(const Image& planar, float* target, int threads) {
 Border border_named(const std::string& name) {
   for (Border border : {Border::replicate, Border::mirror, Border::zero, Border::periodic})
     if (border_name(border) == name) return border;
-  raise_value_error("border", "unknown border '" + name +
-                                  "' (known: replicate, mirror, zero, periodic)");
+  raise_value_error("border",
+                    "unknown border '" + name + "' (known: replicate, mirror, zero, periodic)");
 }
 
 constexpr const char* kBlurDoc = R"(Gaussian blur of an image with one named method of the library.
@@ -128,8 +129,7 @@ py::array blur_binding(py::handle image_object, double sigma, const std::string&
   options.border = border_named(border);
   options.threads = threads;
   resolve_threads(threads);
-  if (empty(image))
-    return py::array(py::dtype::of<float>(), shape_of(image.array));
+  if (empty(image)) return py::array(py::dtype::of<float>(), shape_of(image.array));
   Image planar_out;
   py::array result;
   {
@@ -170,7 +170,8 @@ py::list blur_method_list() {
 // truth of the built-in scenes among the fast methods (README, Results).
 constexpr const char* kDefaultDofMethod = "bokeh";
 
-constexpr const char* kDofDoc = R"(Depth of field: `color` as a thin lens focused at `focus` would see it.
+constexpr const char* kDofDoc =
+    R"(Depth of field: `color` as a thin lens focused at `focus` would see it.
 
 color: height x width x channels (or height x width), linear light, float32 (float64 is
     converted once); depth: height x width, the distance in metres of each pixel (finite, > 0).
@@ -186,8 +187,8 @@ Raises ValueError naming the argument at fault. The GIL is released while the im
 
 py::object dof_binding(py::handle color_object, py::handle depth_object, float focus,
                        float f_number, float focal_length, float sensor_width, float max_coc,
-                       const std::string& method_name, std::optional<bool> layers,
-                       float in_focus, int threads, bool return_coc) {
+                       const std::string& method_name, std::optional<bool> layers, float in_focus,
+                       int threads, bool return_coc) {
   const ImageArray color = image_array(color_object, "color", true);
   const ImageArray depth = image_array(depth_object, "depth", false);
   if (depth.height != color.height || depth.width != color.width)
@@ -262,7 +263,8 @@ void bind_images(py::module_& module) {
              kDofDoc);
   module.def("_dof_methods", &dof_method_list,
              "Every registered depth-of-field method as a dict: name, summary, blurs_foreground, "
-             "honours_layers, keeps_sharp (a sharp pixel no nearer blur covers keeps its value bit for bit), "
+             "honours_layers, keeps_sharp (a sharp pixel no nearer blur covers keeps its value bit "
+             "for bit), "
              "cost.");
 }
 

@@ -65,8 +65,8 @@ Operands gather_operands(std::vector<Input> inputs, const py::object& out, const
     py::array target = py::reinterpret_borrow<py::array>(out);
     require_writable(target, "out");
     if (!target.dtype().equal(dtype))
-      raise_value_error("out", "has dtype " + dtype_name(target) + ", expected " +
-                                   dtype_text(dtype));
+      raise_value_error("out",
+                        "has dtype " + dtype_name(target) + ", expected " + dtype_text(dtype));
     if (shape_of(target) != ops.shape)
       raise_value_error("out", "has shape " + shape_text(shape_of(target)) + ", expected " +
                                    shape_text(ops.shape));
@@ -155,9 +155,8 @@ py::array solve_typed(const py::array& a, const py::array& b, const py::array& c
                       const py::array& d, int axis, const SolveOptions& options,
                       const py::object& out) {
   const py::dtype dtype = py::dtype::of<T>();
-  Operands ops =
-      gather_operands({{"a", a, dtype}, {"b", b, dtype}, {"c", c, dtype}, {"d", d, dtype}}, out,
-                      dtype, axis);
+  Operands ops = gather_operands(
+      {{"a", a, dtype}, {"b", b, dtype}, {"c", c, dtype}, {"d", d, dtype}}, out, dtype, axis);
   const T* sub = data_of<T>(ops.inputs[0]);
   const T* diag = data_of<T>(ops.inputs[1]);
   const T* super = data_of<T>(ops.inputs[2]);
