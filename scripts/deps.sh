@@ -18,6 +18,8 @@ packages=(
   libopenimageio-dev        # image reading and writing
   openimageio-tools         # Debian 12: OpenImageIO's CMake config fails without the tools
   libopenmpi-dev openmpi-bin  # distributed/: solves and ADI across MPI ranks, and mpirun
+  pybind11-dev python3-dev  # the Python module (python/), built for Debian's /usr/bin/python3
+  python3-numpy python3-scipy python3-pytest  # its tests: scipy is the reference
 )
 # The notebooks (notebooks/*.ipynb) run on Debian's Python: no other package index is needed.
 notebook_packages=(

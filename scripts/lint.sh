@@ -6,7 +6,8 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 python3 - <<'PY'
 import pathlib, re, sys
-folders = ["solvers", "image", "diffusion", "blur", "dof", "bench", "tools", "tests", "fuzz", "distributed"]
+folders = ["solvers", "image", "diffusion", "blur", "dof", "bench", "tools", "tests", "fuzz",
+           "distributed", "python"]
 bad = []
 for folder in folders:
     for path in sorted(pathlib.Path(folder).rglob("*")):

@@ -177,6 +177,12 @@ struct Scratch {
   }
 };
 
+template <class T>
+Scratch<T>& thread_scratch() {
+  static thread_local Scratch<T> scratch;
+  return scratch;
+}
+
 // Runs body(first_system, systems, scratch) over chunks of the batch on `threads` threads.
 // A chunk never crosses from one outer batch to the next, so within it systems are
 // system_stride apart, as the lane kernels assume. The exception of the lowest chunk is
@@ -190,9 +196,24 @@ void for_each_chunk(const BatchLayout& layout, std::ptrdiff_t chunk, int threads
   std::ptrdiff_t error_chunk = std::numeric_limits<std::ptrdiff_t>::max();
   std::mutex guard;
   const int team = static_cast<int>(std::min<std::ptrdiff_t>(threads, chunks));
-#pragma omp parallel num_threads(team) if (team > 1)
+  if (team <= 1) {
+    // No OpenMP region for one thread: entering one, even with if(false), costs a futex round
+    // trip in libgomp, several microseconds, more than a small system's solve (measured from
+    // Python on 8 unknowns, shared 2-core machine: 24 us a call with the region, 3.8 without).
+    Scratch<T>& scratch = thread_scratch<T>();
+    try {
+      for (std::ptrdiff_t k = 0; k < chunks; ++k)
+        body(k * chunk, std::min(chunk, count - k * chunk), scratch);
+    } catch (...) {
+      scratch.trim();
+      throw;  // the lowest failing chunk, as below
+    }
+    scratch.trim();
+    return;
+  }
+#pragma omp parallel num_threads(team)
   {
-    static thread_local Scratch<T> scratch;
+    Scratch<T>& scratch = thread_scratch<T>();
 #pragma omp for schedule(static)
     for (std::ptrdiff_t k = 0; k < chunks; ++k) {
       const std::ptrdiff_t batch = k / per_batch, first = (k % per_batch) * chunk;
