@@ -185,8 +185,8 @@ Scratch<T>& thread_scratch() {
 
 // Runs body(first_system, systems, scratch) over chunks of the batch on `threads` threads.
 // A chunk never crosses from one outer batch to the next, so within it systems are
-// system_stride apart, as the lane kernels assume. The exception of the lowest chunk is
-// rethrown after the loop, so errors are deterministic.
+// system_stride apart, as the lane kernels assume. Every chunk runs even when one throws; the
+// exception of the lowest chunk is rethrown after the loop, so errors are deterministic.
 template <class T, class Body>
 void for_each_chunk(const BatchLayout& layout, std::ptrdiff_t chunk, int threads, Body&& body) {
   const std::ptrdiff_t count = layout.count;
@@ -195,39 +195,34 @@ void for_each_chunk(const BatchLayout& layout, std::ptrdiff_t chunk, int threads
   std::exception_ptr error;
   std::ptrdiff_t error_chunk = std::numeric_limits<std::ptrdiff_t>::max();
   std::mutex guard;
+  auto run = [&](std::ptrdiff_t k, Scratch<T>& scratch) {
+    const std::ptrdiff_t batch = k / per_batch, first = (k % per_batch) * chunk;
+    try {
+      body(batch * count + first, std::min(chunk, count - first), scratch);
+    } catch (...) {
+      std::lock_guard<std::mutex> lock(guard);
+      if (k < error_chunk) {
+        error_chunk = k;
+        error = std::current_exception();
+      }
+    }
+  };
   const int team = static_cast<int>(std::min<std::ptrdiff_t>(threads, chunks));
   if (team <= 1) {
     // No OpenMP region for one thread: entering one, even with if(false), costs a futex round
     // trip in libgomp, several microseconds, more than a small system's solve (measured from
     // Python on 8 unknowns, shared 2-core machine: 24 us a call with the region, 3.8 without).
     Scratch<T>& scratch = thread_scratch<T>();
-    try {
-      for (std::ptrdiff_t k = 0; k < chunks; ++k)
-        body(k * chunk, std::min(chunk, count - k * chunk), scratch);
-    } catch (...) {
-      scratch.trim();
-      throw;  // the lowest failing chunk, as below
-    }
+    for (std::ptrdiff_t k = 0; k < chunks; ++k) run(k, scratch);
     scratch.trim();
-    return;
-  }
+  } else {
 #pragma omp parallel num_threads(team)
-  {
-    Scratch<T>& scratch = thread_scratch<T>();
+    {
+      Scratch<T>& scratch = thread_scratch<T>();
 #pragma omp for schedule(static)
-    for (std::ptrdiff_t k = 0; k < chunks; ++k) {
-      const std::ptrdiff_t batch = k / per_batch, first = (k % per_batch) * chunk;
-      try {
-        body(batch * count + first, std::min(chunk, count - first), scratch);
-      } catch (...) {
-        std::lock_guard<std::mutex> lock(guard);
-        if (k < error_chunk) {
-          error_chunk = k;
-          error = std::current_exception();
-        }
-      }
+      for (std::ptrdiff_t k = 0; k < chunks; ++k) run(k, scratch);
+      scratch.trim();
     }
-    scratch.trim();
   }
   if (error) std::rethrow_exception(error);
 }
