@@ -59,7 +59,9 @@ class TridiagonalFactors {
   std::ptrdiff_t n() const { return n_; }
   std::ptrdiff_t count() const { return count_; }
   // Whether system s was factored with partial pivoting.
-  bool pivoted(std::ptrdiff_t s) const { return chunks_[s / kChunk].kind == detail::FactorKind::Pivoting; }
+  bool pivoted(std::ptrdiff_t s) const {
+    return chunks_[s / kChunk].kind == detail::FactorKind::Pivoting;
+  }
   // ||A||_1 of system s (largest column sum of magnitudes), as ?gtcon needs it.
   Real norm1(std::ptrdiff_t s) const { return norm1_[s]; }
   // Bytes of factor storage in all.
@@ -76,7 +78,11 @@ class TridiagonalFactors {
     const std::ptrdiff_t size = n_ * kChunk;
     const T* base = c.values.data();
     const bool pivoting = c.kind == detail::FactorKind::Pivoting;
-    return {c.kind, base, base + size, base + 2 * size, pivoting ? base + 3 * size : nullptr,
+    return {c.kind,
+            base,
+            base + size,
+            base + 2 * size,
+            pivoting ? base + 3 * size : nullptr,
             pivoting ? c.swapped.data() : nullptr};
   }
   std::ptrdiff_t chunks() const { return std::ptrdiff_t(chunks_.size()); }
@@ -216,7 +222,8 @@ TridiagonalFactors<F> factor_as(const In* sub, const In* diag, const In* super,
                                      lane_array<F, W>(v, n, 1, l), lane_array<F, W>(v, n, 2, l))
                 : factor_pivoting(n, s.a, s.b, s.c, lane_array<F, W>(v, n, 0, l),
                                   lane_array<F, W>(v, n, 1, l), lane_array<F, W>(v, n, 2, l),
-                                  lane_array<F, W>(v, n, 3, l), Strided<unsigned char>{swaps + l, W});
+                                  lane_array<F, W>(v, n, 3, l),
+                                  Strided<unsigned char>{swaps + l, W});
         if (bad >= 0) {
           if (kind == FactorKind::NoPivoting && options.method == Factorization::Auto) return l;
           throw NumericalError(first + l, bad,
@@ -270,6 +277,65 @@ TridiagonalFactors<T> factor_diffusion(const real_t<T>* beta, const BatchLayout&
 
 namespace detail {
 
+[[noreturn]] inline void report_overflow(std::ptrdiff_t system) {
+  throw NumericalError(system, -1, "the solution overflowed: rhs is too large for this matrix");
+}
+
+// Throws for the first non-finite value of a chunk's rhs (the caller's fault), otherwise for
+// an overflow in the first lane whose probe is not zero.
+template <class T, class R>
+[[noreturn]] void report_chunk_failure(const T* rhs, const BatchLayout& layout,
+                                       std::ptrdiff_t first, int lanes, const R* probe) {
+  for (std::ptrdiff_t i = 0; i < layout.n; ++i)
+    for (int l = 0; l < lanes; ++l)
+      if (!is_finite(rhs[layout.offset(first + l, i)]))
+        throw InvalidArgument("rhs", first + l, i, "is not finite");
+  for (int l = 0; l < lanes; ++l)
+    if (!(probe[l] == 0)) report_overflow(first + l);
+  report_overflow(first);
+}
+
+// The hot case of a factored solve, A x = b without pivoting on a whole chunk into an x apart
+// from rhs, with no slab round trip: interleaved systems (image columns) are solved where they
+// lie; contiguous ones (image rows) are transposed into lanes kTransposeBlock rows at a time,
+// each block swept while it is in L1, and back the same way. Returns false for other cases.
+template <class T>
+bool solve_chunk_streaming(const ChunkFactors<T>& f, const T* rhs, T* x, const BatchLayout& layout,
+                           std::ptrdiff_t first, std::ptrdiff_t systems, Scratch<T>& scratch) {
+  constexpr int W = kLanes<T>;
+  const std::ptrdiff_t n = layout.n, o = layout.offset(first, 0);
+  if (f.kind != FactorKind::NoPivoting || systems != W || x == rhs) return false;
+  real_t<T> probe[W], block_probe[W];
+  if (layout.system_stride == 1) {
+    const std::ptrdiff_t rs = layout.row_stride;
+    forward_no_pivoting<T, W, W>(f, 0, n, rhs + o, rs, x + o, rs);
+    backward_no_pivoting<T, W, W>(f, n, 0, n, x + o, rs, probe);
+  } else if (layout.row_stride == 1) {
+    const std::ptrdiff_t pitch = layout.system_stride;
+    scratch.work.resize(n * W);
+    T* slab = scratch.work.data();
+    for (std::ptrdiff_t begin = 0; begin < n; begin += kTransposeBlock) {
+      const std::ptrdiff_t end = std::min(n, begin + kTransposeBlock);
+      transpose_into_lanes<T, W>(rhs + o + begin, pitch, end - begin, slab + begin * W);
+      forward_no_pivoting<T, W, W>(f, begin, end, slab, W, slab, W);
+    }
+    for (int l = 0; l < W; ++l) probe[l] = 0;
+    for (std::ptrdiff_t begin = (n - 1) / kTransposeBlock * kTransposeBlock; begin >= 0;
+         begin -= kTransposeBlock) {
+      const std::ptrdiff_t end = std::min(n, begin + kTransposeBlock);
+      backward_no_pivoting<T, W, W>(f, n, begin, end, slab, W, block_probe);
+      for (int l = 0; l < W; ++l) probe[l] += block_probe[l];
+      transpose_from_lanes<T, W>(slab + begin * W, end - begin, x + o + begin, pitch);
+    }
+  } else {
+    return false;
+  }
+  real_t<T> sum = 0;
+  for (int l = 0; l < W; ++l) sum += probe[l];
+  if (!(sum == 0)) report_chunk_failure(rhs, layout, first, W, probe);
+  return true;
+}
+
 // Solves one chunk's right-hand side j in lanes: through a lane-contiguous slab (gathered,
 // solved, checked, scattered), so that an in-place solve that overflows leaves rhs as it was.
 template <class F, class T>
@@ -285,23 +351,18 @@ void solve_chunk_factored(const ChunkFactors<F>& f, Apply apply, const T* rhs, T
     gather<T, W>(rhs, layout, first, lanes, T(0), slab);
   } else {
     for (std::ptrdiff_t i = 0; i < n; ++i)
-      for (int l = 0; l < W; ++l) slab[i * W + l] = l < lanes ? F(rhs[layout.offset(first + l, i)]) : F(0);
+      for (int l = 0; l < W; ++l)
+        slab[i * W + l] = l < lanes ? F(rhs[layout.offset(first + l, i)]) : F(0);
   }
   solve_factored<F, W, W>(f, apply, n, slab, W);
-  real_t<F> probe = 0;  // NaN iff some value is not finite
-#pragma omp simd reduction(+ : probe)
-  for (std::ptrdiff_t k = 0; k < n * W; ++k) probe += magnitude(slab[k]) * 0;
-  if (!(probe == 0)) {
-    for (std::ptrdiff_t i = 0; i < n; ++i)
-      for (int l = 0; l < lanes; ++l)
-        if (!is_finite(rhs[layout.offset(first + l, i)]))
-          throw InvalidArgument("rhs", first + l, i, "is not finite");
-    for (int l = 0; l < lanes; ++l)
-      for (std::ptrdiff_t i = 0; i < n; ++i)
-        if (!is_finite(slab[i * W + l]))
-          throw NumericalError(first + l, -1,
-                               "the solution overflowed: rhs is too large for this matrix");
-  }
+  real_t<F> probe[W];  // NaN iff some value of the lane is not finite
+  for (int l = 0; l < W; ++l) probe[l] = 0;
+  for (std::ptrdiff_t i = 0; i < n; ++i)
+#pragma omp simd
+    for (int l = 0; l < W; ++l) probe[l] += magnitude(slab[i * W + l]) * 0;
+  real_t<F> sum = 0;
+  for (int l = 0; l < lanes; ++l) sum += probe[l];
+  if (!(sum == 0)) report_chunk_failure(rhs, layout, first, lanes, probe);
   if constexpr (std::is_same_v<F, T>) {
     scatter<T, W>(slab, layout, first, lanes, x);
   } else {
@@ -310,7 +371,8 @@ void solve_chunk_factored(const ChunkFactors<F>& f, Apply apply, const T* rhs, T
   }
 }
 
-inline std::ptrdiff_t rhs_stride_of(const FactoredSolveOptions& options, const BatchLayout& layout) {
+inline std::ptrdiff_t rhs_stride_of(const FactoredSolveOptions& options,
+                                    const BatchLayout& layout) {
   if (options.nrhs < 1)
     throw InvalidArgument("nrhs", "must be at least 1, got " + std::to_string(options.nrhs));
   const std::ptrdiff_t stride = options.rhs_stride == 0 ? layout.extent() : options.rhs_stride;
@@ -352,15 +414,21 @@ void solve(const TridiagonalFactors<T>& factors, const T* rhs, T* x, const Batch
   require_disjoint(rhs, "rhs", x, all, true);
   if (options.apply != Apply::Matrix && options.apply != Apply::Transpose &&
       options.apply != Apply::Adjoint)
-    throw InvalidArgument("apply", "is not an Apply (" +
-                                       std::to_string(static_cast<int>(options.apply)) + ")");
+    throw InvalidArgument(
+        "apply", "is not an Apply (" + std::to_string(static_cast<int>(options.apply)) + ")");
   const int threads = resolve_threads(options.threads);
   for_each_chunk<T>(layout.count, W, threads,
                     [&](std::ptrdiff_t first, std::ptrdiff_t systems, Scratch<T>& scratch) {
                       const ChunkFactors<T> f = factors.chunk(first / W);
-                      for (std::ptrdiff_t j = 0; j < options.nrhs; ++j)
-                        solve_chunk_factored(f, options.apply, rhs + j * stride, x + j * stride,
-                                             layout, first, systems, scratch);
+                      for (std::ptrdiff_t j = 0; j < options.nrhs; ++j) {
+                        const T* b = rhs + j * stride;
+                        T* out = x + j * stride;
+                        if (options.apply == Apply::Matrix &&
+                            solve_chunk_streaming(f, b, out, layout, first, systems, scratch))
+                          continue;
+                        solve_chunk_factored(f, options.apply, b, out, layout, first, systems,
+                                             scratch);
+                      }
                     });
 }
 

@@ -72,7 +72,8 @@ R componentwise_backward_error(const Value* r, const R* scale, std::ptrdiff_t n)
   R worst = 0;
   for (std::ptrdiff_t i = 0; i < n; ++i) {
     const R size = R(magnitude(r[i]));
-    worst = std::max(worst, scale[i] > safe2 ? size / scale[i] : (size + safe1) / (scale[i] + safe1));
+    worst =
+        std::max(worst, scale[i] > safe2 ? size / scale[i] : (size + safe1) / (scale[i] + safe1));
   }
   return worst;
 }
@@ -153,7 +154,8 @@ std::vector<real_t<T>> estimate_rcond(const TridiagonalFactors<T>& factors, int 
                             [&](std::vector<T>& v) {
                               solve_factored<T, W, 1>(lane, Apply::Adjoint, n, v.data(), 1);
                             });
-                        rcond[first + l] = norm > 0 && inverse_norm > 0 ? 1 / inverse_norm / norm : 0;
+                        rcond[first + l] =
+                            norm > 0 && inverse_norm > 0 ? 1 / inverse_norm / norm : 0;
                       }
                     });
   return rcond;
@@ -188,8 +190,11 @@ RefineReport<real_t<T>> refine(const T* sub, const T* diag, const T* super,
   constexpr int W = kLanes<T>;
   validate_layout(layout);
   require_matching(factors, layout);
-  for (const auto& [p, name] : {std::pair<const T*, const char*>{sub, "sub"}, {diag, "diag"},
-                                {super, "super"}, {rhs, "rhs"}, {x, "x"}})
+  for (const auto& [p, name] : {std::pair<const T*, const char*>{sub, "sub"},
+                                {diag, "diag"},
+                                {super, "super"},
+                                {rhs, "rhs"},
+                                {x, "x"}})
     require_pointer(p, name);
   require_disjoint(rhs, "rhs", x, layout, false);
   const std::ptrdiff_t stride =
@@ -200,42 +205,45 @@ RefineReport<real_t<T>> refine(const T* sub, const T* diag, const T* super,
   report.forward_error.resize(layout.count * nrhs);
   report.backward_error.resize(layout.count * nrhs);
   report.iterations.resize(layout.count * nrhs);
-  for_each_chunk<T>(layout.count, W, resolve_threads(options.threads),
-                    [&](std::ptrdiff_t first, std::ptrdiff_t systems, Scratch<T>&) {
-    const ChunkFactors<T> f = factors.chunk(first / W);
-    std::vector<T> xs(n), bs(n), r(n);
-    std::vector<R> scale(n);
-    for (int l = 0; l < systems; ++l) {
-      const std::ptrdiff_t s = first + l;
-      const ChunkFactors<T> lane = lane_of<T, W>(f, l);
-      const SystemView<T> view = system_view(sub, diag, super, rhs, layout, s, false);
-      for (std::ptrdiff_t j = 0; j < nrhs; ++j) {
-        const Strided<T> out{x + j * stride + layout.offset(s, 0), layout.row_stride};
-        for (std::ptrdiff_t i = 0; i < n; ++i) {
-          xs[i] = out[i];
-          bs[i] = rhs[j * stride + layout.offset(s, i)];
+  for_each_chunk<T>(
+      layout.count, W, resolve_threads(options.threads),
+      [&](std::ptrdiff_t first, std::ptrdiff_t systems, Scratch<T>&) {
+        const ChunkFactors<T> f = factors.chunk(first / W);
+        std::vector<T> xs(n), bs(n), r(n);
+        std::vector<R> scale(n);
+        for (int l = 0; l < systems; ++l) {
+          const std::ptrdiff_t s = first + l;
+          const ChunkFactors<T> lane = lane_of<T, W>(f, l);
+          const SystemView<T> view = system_view(sub, diag, super, rhs, layout, s, false);
+          for (std::ptrdiff_t j = 0; j < nrhs; ++j) {
+            const Strided<T> out{x + j * stride + layout.offset(s, 0), layout.row_stride};
+            for (std::ptrdiff_t i = 0; i < n; ++i) {
+              xs[i] = out[i];
+              bs[i] = rhs[j * stride + layout.offset(s, i)];
+            }
+            R backward = 0, last = 3;
+            int count = 0;
+            for (;;) {
+              residual<wider_t<T>>(view, options.apply, xs.data(), bs.data(), r.data(),
+                                   scale.data());
+              backward = componentwise_backward_error(r.data(), scale.data(), n);
+              // ?gtrfs: go on while the error is above eps and at least halves each step.
+              if (!(backward > eps && 2 * backward <= last && count < options.max_iterations))
+                break;
+              solve_lane(lane, options.apply, false, n, r.data());
+              for (std::ptrdiff_t i = 0; i < n; ++i) xs[i] += r[i];
+              last = backward;
+              ++count;
+            }
+            const std::ptrdiff_t k = s * nrhs + j;
+            report.backward_error[k] = backward;
+            report.iterations[k] = count;
+            report.forward_error[k] =
+                forward_error_bound(lane, options.apply, n, xs.data(), r.data(), scale.data());
+            for (std::ptrdiff_t i = 0; i < n; ++i) out[i] = xs[i];
+          }
         }
-        R backward = 0, last = 3;
-        int count = 0;
-        for (;;) {
-          residual<wider_t<T>>(view, options.apply, xs.data(), bs.data(), r.data(), scale.data());
-          backward = componentwise_backward_error(r.data(), scale.data(), n);
-          // ?gtrfs: go on while the error is above eps and at least halves each step.
-          if (!(backward > eps && 2 * backward <= last && count < options.max_iterations)) break;
-          solve_lane(lane, options.apply, false, n, r.data());
-          for (std::ptrdiff_t i = 0; i < n; ++i) xs[i] += r[i];
-          last = backward;
-          ++count;
-        }
-        const std::ptrdiff_t k = s * nrhs + j;
-        report.backward_error[k] = backward;
-        report.iterations[k] = count;
-        report.forward_error[k] = forward_error_bound(lane, options.apply, n, xs.data(), r.data(),
-                                                      scale.data());
-        for (std::ptrdiff_t i = 0; i < n; ++i) out[i] = xs[i];
-      }
-    }
-  });
+      });
   return report;
 }
 
@@ -243,10 +251,10 @@ RefineReport<real_t<T>> refine(const T* sub, const T* diag, const T* super,
 // Mixed precision
 
 enum class MixedStatus : unsigned char {
-  Converged,      // backward error <= MixedOptions::target_backward_error
-  IllConditioned, // the float factors' condition estimate exceeds 1 / u_float: refinement
-                  // cannot converge; solve this system in double
-  Stalled,        // neither: refinement stopped improving (badly scaled or nearly singular)
+  Converged,       // backward error <= MixedOptions::target_backward_error
+  IllConditioned,  // the float factors' condition estimate exceeds 1 / u_float: refinement
+                   // cannot converge; solve this system in double
+  Stalled,         // neither: refinement stopped improving (badly scaled or nearly singular)
 };
 
 struct MixedOptions {
@@ -260,8 +268,8 @@ struct MixedReport {
   std::vector<double> backward_error;  // per system: componentwise, of the returned x
   std::vector<int> iterations;         // float solves applied (the first included)
   std::vector<MixedStatus> status;
-  std::vector<float> rcond;            // the float factors' estimate, for systems not converged
-  std::ptrdiff_t not_converged = 0;    // systems whose status is not Converged
+  std::vector<float> rcond;          // the float factors' estimate, for systems not converged
+  std::ptrdiff_t not_converged = 0;  // systems whose status is not Converged
 };
 
 // Solves double (or complex double) systems with single-precision factors (from
@@ -281,8 +289,11 @@ MixedReport solve_mixed(const TridiagonalFactors<F>& factors, const T* sub, cons
   constexpr int W = kLanes<F>;
   validate_layout(layout);
   require_matching(factors, layout);
-  for (const auto& [p, name] : {std::pair<const T*, const char*>{sub, "sub"}, {diag, "diag"},
-                                {super, "super"}, {rhs, "rhs"}, {x, "x"}})
+  for (const auto& [p, name] : {std::pair<const T*, const char*>{sub, "sub"},
+                                {diag, "diag"},
+                                {super, "super"},
+                                {rhs, "rhs"},
+                                {x, "x"}})
     require_pointer(p, name);
   require_disjoint(rhs, "rhs", x, layout, true);
   const std::ptrdiff_t n = layout.n;
@@ -292,57 +303,63 @@ MixedReport solve_mixed(const TridiagonalFactors<F>& factors, const T* sub, cons
   report.iterations.resize(layout.count);
   report.status.resize(layout.count);
   report.rcond.assign(layout.count, -1.0f);
-  for_each_chunk<F>(layout.count, W, resolve_threads(options.threads),
-                    [&](std::ptrdiff_t first, std::ptrdiff_t systems, Scratch<F>&) {
-    const ChunkFactors<F> f = factors.chunk(first / W);
-    std::vector<T> xs(n), bs(n), r(n), best(n);
-    std::vector<F> correction(n);
-    std::vector<R> scale(n);
-    for (int l = 0; l < systems; ++l) {
-      const std::ptrdiff_t s = first + l;
-      const ChunkFactors<F> lane = lane_of<F, W>(f, l);
-      const SystemView<T> view = system_view(sub, diag, super, rhs, layout, s, false);
-      for (std::ptrdiff_t i = 0; i < n; ++i) {
-        r[i] = bs[i] = view.d[i];
-        xs[i] = T(0);
-      }
-      // x = 0 has backward error 1: the starting point the iterates must beat.
-      R best_backward = 1, previous = std::numeric_limits<R>::infinity();
-      std::fill(best.begin(), best.end(), T(0));
-      int count = 0;
-      while (count < options.max_iterations) {
-        for (std::ptrdiff_t i = 0; i < n; ++i) correction[i] = F(r[i]);
-        solve_factored<F, W, 1>(lane, Apply::Matrix, n, correction.data(), 1);
-        for (std::ptrdiff_t i = 0; i < n; ++i) xs[i] += T(correction[i]);
-        ++count;
-        residual<T>(view, Apply::Matrix, xs.data(), bs.data(), r.data(), scale.data());
-        const R backward = componentwise_backward_error(r.data(), scale.data(), n);
-        if (backward < best_backward) {
-          best_backward = backward;
-          best = xs;
+  for_each_chunk<F>(
+      layout.count, W, resolve_threads(options.threads),
+      [&](std::ptrdiff_t first, std::ptrdiff_t systems, Scratch<F>&) {
+        const ChunkFactors<F> f = factors.chunk(first / W);
+        std::vector<T> xs(n), bs(n), r(n), best(n);
+        std::vector<F> correction(n);
+        std::vector<R> scale(n);
+        for (int l = 0; l < systems; ++l) {
+          const std::ptrdiff_t s = first + l;
+          const ChunkFactors<F> lane = lane_of<F, W>(f, l);
+          const SystemView<T> view = system_view(sub, diag, super, rhs, layout, s, false);
+          for (std::ptrdiff_t i = 0; i < n; ++i) {
+            r[i] = bs[i] = view.d[i];
+            xs[i] = T(0);
+          }
+          // x = 0 has backward error 1: the starting point the iterates must beat.
+          R best_backward = 1, previous = std::numeric_limits<R>::infinity();
+          std::fill(best.begin(), best.end(), T(0));
+          int count = 0;
+          while (count < options.max_iterations) {
+            for (std::ptrdiff_t i = 0; i < n; ++i) correction[i] = F(r[i]);
+            solve_factored<F, W, 1>(lane, Apply::Matrix, n, correction.data(), 1);
+            for (std::ptrdiff_t i = 0; i < n; ++i) xs[i] += T(correction[i]);
+            ++count;
+            residual<T>(view, Apply::Matrix, xs.data(), bs.data(), r.data(), scale.data());
+            const R backward = componentwise_backward_error(r.data(), scale.data(), n);
+            if (backward < best_backward) {
+              best_backward = backward;
+              best = xs;
+            }
+            // Done, or stalled: each step of a convergent refinement gains a factor of about
+            // cond(A) u_float, so a step that does not halve the error will not reach the target.
+            if (best_backward <= target || !(backward <= previous / 2)) break;
+            previous = backward;
+          }
+          report.backward_error[s] = best_backward;
+          report.iterations[s] = count;
+          for (std::ptrdiff_t i = 0; i < n; ++i) x[layout.offset(s, i)] = best[i];
+          if (best_backward <= target) {
+            report.status[s] = MixedStatus::Converged;
+            continue;
+          }
+          const float norm = factors.norm1(s);
+          const float inverse_norm = estimate_norm1<F>(
+              n,
+              [&](std::vector<F>& v) {
+                solve_factored<F, W, 1>(lane, Apply::Matrix, n, v.data(), 1);
+              },
+              [&](std::vector<F>& v) {
+                solve_factored<F, W, 1>(lane, Apply::Adjoint, n, v.data(), 1);
+              });
+          report.rcond[s] = norm > 0 && inverse_norm > 0 ? 1 / inverse_norm / norm : 0;
+          report.status[s] = report.rcond[s] < std::numeric_limits<float>::epsilon() / 2
+                                 ? MixedStatus::IllConditioned
+                                 : MixedStatus::Stalled;
         }
-        // Done, or stalled: each step of a convergent refinement gains a factor of about
-        // cond(A) u_float, so a step that does not halve the error will not reach the target.
-        if (best_backward <= target || !(backward <= previous / 2)) break;
-        previous = backward;
-      }
-      report.backward_error[s] = best_backward;
-      report.iterations[s] = count;
-      for (std::ptrdiff_t i = 0; i < n; ++i) x[layout.offset(s, i)] = best[i];
-      if (best_backward <= target) {
-        report.status[s] = MixedStatus::Converged;
-        continue;
-      }
-      const float norm = factors.norm1(s);
-      const float inverse_norm = estimate_norm1<F>(
-          n, [&](std::vector<F>& v) { solve_factored<F, W, 1>(lane, Apply::Matrix, n, v.data(), 1); },
-          [&](std::vector<F>& v) { solve_factored<F, W, 1>(lane, Apply::Adjoint, n, v.data(), 1); });
-      report.rcond[s] = norm > 0 && inverse_norm > 0 ? 1 / inverse_norm / norm : 0;
-      report.status[s] = report.rcond[s] < std::numeric_limits<float>::epsilon() / 2
-                             ? MixedStatus::IllConditioned
-                             : MixedStatus::Stalled;
-    }
-  });
+      });
   report.not_converged = std::count_if(report.status.begin(), report.status.end(),
                                        [](MixedStatus s) { return s != MixedStatus::Converged; });
   return report;

@@ -103,6 +103,39 @@ std::ptrdiff_t factor_pivoting(std::ptrdiff_t n, Strided<const T> a, Strided<con
   return -1;
 }
 
+// Rows [begin, end) of L z = b without pivoting: z_i = (b_i - a_i z_{i-1}) / u_i, reading b
+// from `in` and writing z to `y` (which may be `in`); row begin - 1 of y is already done. The
+// blocked drivers call it a block of rows at a time, while the block is in L1.
+template <class T, int W, int Lanes>
+void forward_no_pivoting(const ChunkFactors<T>& f, std::ptrdiff_t begin, std::ptrdiff_t end,
+                         const T* in, std::ptrdiff_t in_stride, T* y, std::ptrdiff_t y_stride) {
+  for (std::ptrdiff_t i = begin; i < end; ++i) {
+    const T* bi = in + i * in_stride;
+    T* yi = y + i * y_stride;
+    const T* previous = i > 0 ? yi - y_stride : bi;  // a_0 = 0: row -1 is never used
+#pragma omp simd
+    for (int l = 0; l < Lanes; ++l)
+      yi[l] = (bi[l] - f.lower[i * W + l] * previous[l]) * f.inverse_pivot[i * W + l];
+  }
+}
+
+// Rows end - 1 down to begin of U x = z (unit upper: x_i = z_i - w_i x_{i+1}) in place; row
+// `end` is already done. probe[l] += |x_i| * 0 over the rows: NaN iff some x_i is not finite.
+template <class T, int W, int Lanes>
+void backward_no_pivoting(const ChunkFactors<T>& f, std::ptrdiff_t n, std::ptrdiff_t begin,
+                          std::ptrdiff_t end, T* y, std::ptrdiff_t y_stride, real_t<T>* probe) {
+  for (int l = 0; l < Lanes; ++l) probe[l] = 0;
+  for (std::ptrdiff_t i = end - 1; i >= begin; --i) {
+    T* yi = y + i * y_stride;
+    const T* next = i + 1 < n ? yi + y_stride : yi;  // w_{n-1} = 0
+#pragma omp simd
+    for (int l = 0; l < Lanes; ++l) {
+      yi[l] -= f.upper[i * W + l] * next[l];
+      probe[l] += magnitude(yi[l]) * 0;
+    }
+  }
+}
+
 // Solves op(A) y = y in place for the `Lanes` systems of one chunk, y's element (i, l) at
 // y[i * y_stride + l] and the factors' at [i * W + l] (W >= Lanes; pass the factor pointers of
 // lane l and Lanes = 1 to solve one system). Every step is a vector operation across lanes;
@@ -114,19 +147,9 @@ void solve_factored(const ChunkFactors<T>& f, Apply apply, std::ptrdiff_t n, T* 
   auto at = [&](const T* p, std::ptrdiff_t i, int l) { return conjugate_if(p[i * W + l], conj); };
   auto row = [&](std::ptrdiff_t i) { return y + i * y_stride; };
   if (f.kind == FactorKind::NoPivoting && apply == Apply::Matrix) {
-    for (std::ptrdiff_t i = 0; i < n; ++i) {  // L z = y; a_0 = 0 and row(-1) is never read
-      T* yi = row(i);
-      const T* previous = i > 0 ? row(i - 1) : yi;
-#pragma omp simd
-      for (int l = 0; l < Lanes; ++l)
-        yi[l] = (yi[l] - f.lower[i * W + l] * previous[l]) * f.inverse_pivot[i * W + l];
-    }
-    for (std::ptrdiff_t i = n - 2; i >= 0; --i) {  // U x = z
-      T* yi = row(i);
-      const T* next = row(i + 1);
-#pragma omp simd
-      for (int l = 0; l < Lanes; ++l) yi[l] -= f.upper[i * W + l] * next[l];
-    }
+    forward_no_pivoting<T, W, Lanes>(f, 0, n, y, y_stride, y, y_stride);
+    real_t<T> unused[Lanes];
+    backward_no_pivoting<T, W, Lanes>(f, n, 0, n, y, y_stride, unused);
     return;
   }
   if (f.kind == FactorKind::NoPivoting) {  // A^T = U^T L^T
