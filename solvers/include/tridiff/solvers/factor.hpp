@@ -16,6 +16,7 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <cstdint>
 #include <mutex>
 #include <string>
 #include <vector>
@@ -277,6 +278,28 @@ TridiagonalFactors<T> factor_diffusion(const real_t<T>* beta, const BatchLayout&
 
 namespace detail {
 
+// to[0, count) = from[0, count), the whole 64-byte pieces with non-temporal stores: a solution
+// row that nothing reads again soon is then not first read from memory to be overwritten
+// (the write-allocate that STREAM counting leaves out). The caller ends with
+// finish_streaming_stores() before the data may be read by another thread.
+template <class T>
+void copy_streaming(const T* from, std::ptrdiff_t count, T* to) {
+#if defined(__AVX512F__)
+  static_assert(sizeof(T) % sizeof(float) == 0);
+  const auto* in = reinterpret_cast<const float*>(from);
+  auto* out = reinterpret_cast<float*>(to);
+  std::ptrdiff_t k = 0, floats = count * std::ptrdiff_t(sizeof(T) / sizeof(float));
+  while (k < floats && (reinterpret_cast<std::uintptr_t>(out + k) & 63) != 0) {
+    out[k] = in[k];
+    ++k;
+  }
+  for (; k + 16 <= floats; k += 16) _mm512_stream_ps(out + k, _mm512_loadu_ps(in + k));
+  for (; k < floats; ++k) out[k] = in[k];
+#else
+  std::copy(from, from + count, to);
+#endif
+}
+
 [[noreturn]] inline void report_overflow(std::ptrdiff_t system) {
   throw NumericalError(system, -1, "the solution overflowed: rhs is too large for this matrix");
 }
@@ -311,22 +334,31 @@ bool solve_chunk_streaming(const ChunkFactors<T>& f, const T* rhs, T* x, const B
     forward_no_pivoting<T, W, W>(f, 0, n, rhs + o, rs, x + o, rs);
     backward_no_pivoting<T, W, W>(f, n, 0, n, x + o, rs, probe);
   } else if (layout.row_stride == 1) {
-    const std::ptrdiff_t pitch = layout.system_stride;
+    // The W rows are first copied one after another into a staging area, as
+    // diffusion_thomas_rows does: W rows read side by side are more streams than DRAM and the
+    // prefetchers serve well.
+    const std::ptrdiff_t pitch = layout.system_stride, staged = staging_pitch(n);
     scratch.work.resize(n * W);
-    T* slab = scratch.work.data();
+    scratch.slab.resize(W * staged);
+    T* lanes = scratch.work.data();
+    T* staging = scratch.slab.data();
+    for (int l = 0; l < W; ++l)
+      std::copy(rhs + o + l * pitch, rhs + o + l * pitch + n, staging + l * staged);
     for (std::ptrdiff_t begin = 0; begin < n; begin += kTransposeBlock) {
       const std::ptrdiff_t end = std::min(n, begin + kTransposeBlock);
-      transpose_into_lanes<T, W>(rhs + o + begin, pitch, end - begin, slab + begin * W);
-      forward_no_pivoting<T, W, W>(f, begin, end, slab, W, slab, W);
+      transpose_into_lanes<T, W>(staging + begin, staged, end - begin, lanes + begin * W);
+      forward_no_pivoting<T, W, W>(f, begin, end, lanes, W, lanes, W);
     }
     for (int l = 0; l < W; ++l) probe[l] = 0;
     for (std::ptrdiff_t begin = (n - 1) / kTransposeBlock * kTransposeBlock; begin >= 0;
          begin -= kTransposeBlock) {
       const std::ptrdiff_t end = std::min(n, begin + kTransposeBlock);
-      backward_no_pivoting<T, W, W>(f, n, begin, end, slab, W, block_probe);
+      backward_no_pivoting<T, W, W>(f, n, begin, end, lanes, W, block_probe);
       for (int l = 0; l < W; ++l) probe[l] += block_probe[l];
-      transpose_from_lanes<T, W>(slab + begin * W, end - begin, x + o + begin, pitch);
+      transpose_from_lanes<T, W>(lanes + begin * W, end - begin, staging + begin, staged);
     }
+    for (int l = 0; l < W; ++l) copy_streaming(staging + l * staged, n, x + o + l * pitch);
+    finish_streaming_stores();
   } else {
     return false;
   }
