@@ -187,6 +187,7 @@ struct MixedLanes {
   std::ptrdiff_t n;
   T *a, *b, *c, *d, *x;
   F* correction;
+  T zero_row_[V] = {};  // x_{-1}, x_n and the entries outside the matrix
 
   MixedLanes(std::ptrdiff_t rows, T* slabs, F* corrections)
       : n(rows),
@@ -227,33 +228,34 @@ struct MixedLanes {
       correction[k] = F(d[k]);
     }
     for (int step = 0; step < max_iterations; ++step) {
+      // Frozen lanes have a zero correction column: their x stays as reported.
       solve_factored<F, W, V>(group, Apply::Matrix, n, correction, V);
-      for (std::ptrdiff_t i = 0; i < n; ++i)
-#pragma omp simd
-        for (int l = 0; l < V; ++l)
-          if (active[l]) x[i * V + l] += T(correction[i * V + l]);
+      for (std::ptrdiff_t k = 0; k < n * V; ++k) x[k] += T(correction[k]);
       for (int l = 0; l < V; ++l) error[l] = 0;
       for (std::ptrdiff_t i = 0; i < n; ++i) {
+        // Rows 0 and n-1 read x_{-1} and x_n as zero times their own x: sub[0] and super[n-1]
+        // are not read (they may hold anything).
         const T* xi = x + i * V;
-        const T* left = i > 0 ? xi - V : xi;
-        const T* right = i + 1 < n ? xi + V : xi;
-        const bool has_left = i > 0, has_right = i + 1 < n;  // sub[0], super[n-1] unread
+        const T* left = i > 0 ? xi - V : zero_row_;
+        const T* right = i + 1 < n ? xi + V : zero_row_;
+        const T* ai = i > 0 ? a + i * V : zero_row_;
+        const T* ci = i + 1 < n ? c + i * V : zero_row_;
+        const T* bi = b + i * V;
+        const T* di = d + i * V;
+        F* ri = correction + i * V;
 #pragma omp simd
         for (int l = 0; l < V; ++l) {
-          const T ax = has_left ? a[i * V + l] * left[l] : T(0);
-          const T cx = has_right ? c[i * V + l] * right[l] : T(0);
-          const T bx = b[i * V + l] * xi[l];
-          const T res = d[i * V + l] - ax - bx - cx;
-          const R scale = magnitude(d[i * V + l]) +
-                          (has_left ? magnitude(a[i * V + l]) * magnitude(left[l]) : R(0)) +
-                          magnitude(b[i * V + l]) * magnitude(xi[l]) +
-                          (has_right ? magnitude(c[i * V + l]) * magnitude(right[l]) : R(0));
+          const T res = di[l] - ai[l] * left[l] - bi[l] * xi[l] - ci[l] * right[l];
+          const R scale = magnitude(di[l]) + magnitude(ai[l]) * magnitude(left[l]) +
+                          magnitude(bi[l]) * magnitude(xi[l]) +
+                          magnitude(ci[l]) * magnitude(right[l]);
           const R size = magnitude(res);
-          const R ratio = size == 0       ? R(0)
-                          : scale > safe2 ? size / scale
-                                          : (size + safe1) / (scale + safe1);
-          error[l] = std::max(error[l], ratio);
-          correction[i * V + l] = F(res);
+          // ?gtrfs's guard against scales that underflow; an exact row counts 0.
+          const bool tiny = !(scale > safe2);
+          const R ratio = (size + (tiny ? safe1 : R(0))) / (scale + (tiny ? safe1 : R(0)));
+          const R counted = size == 0 ? R(0) : ratio;
+          error[l] = error[l] > counted ? error[l] : counted;
+          ri[l] = F(res);
         }
       }
       bool any = false;
@@ -266,6 +268,8 @@ struct MixedLanes {
         active[l] = !(error[l] <= target) && error[l] <= previous[l] / 2;
         previous[l] = error[l];
         any = any || active[l];
+        if (!active[l])
+          for (std::ptrdiff_t i = 0; i < n; ++i) correction[i * V + l] = F(0);
       }
       if (!any) break;
     }
