@@ -132,9 +132,9 @@ SystemView<F> system_as(const In* a, const In* b, const In* c, const BatchLayout
     copy.resize(3 * n);
     F* out = copy.data();
     for (std::ptrdiff_t i = 0; i < n; ++i) {
-      out[i] = F(a[o + i * rs]);
+      out[i] = i > 0 ? F(a[o + i * rs]) : F(0);  // sub[0] and super[n-1] are not read
       out[n + i] = F(b[o + i * rs]);
-      out[2 * n + i] = F(c[o + i * rs]);
+      out[2 * n + i] = i + 1 < n ? F(c[o + i * rs]) : F(0);
     }
     return {{out, 1}, {out + n, 1}, {out + 2 * n, 1}, {out + n, 1}, n, false};
   }
