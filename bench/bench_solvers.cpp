@@ -617,3 +617,158 @@ int main(int argc, char** argv) {
   benchmark::Shutdown();
   return 0;
 }
+
+// ---------------------------------------------------------------------------------------------
+// Factor once, solve many (tridiff/solvers/factor.hpp, refine.hpp)
+//
+//   BM_solvers_factored/<scalar>/general/<shape>/threads:<t>   solve(factors, rhs, x) with the
+//       factors made once outside the timed loop; bytes: the three factor arrays (no pivoting
+//       for this dominant matrix), rhs and x = 5 arrays.
+//   BM_solvers_lapack_gttrs/<scalar>/general/rows:...            ?gttrs once per system on
+//       ?gttrf's factors made outside the loop (rhs copied into x first, in place there);
+//       bytes: dl, d, du, du2, ipiv, rhs, x = its 7 arrays.
+//   BM_solvers_mixed/double/general/<shape>/threads:<t>         solve_mixed with float factors
+//       made outside the loop: a float solve refined to a double backward error; bytes
+//       counted as the double problem's 5 arrays, to compare with the double solves.
+// Registered at static initialisation, so that this section needs no line elsewhere.
+extern "C" {
+void sgttrf_(const int* n, float* dl, float* d, float* du, float* du2, int* ipiv, int* info);
+void dgttrf_(const int* n, double* dl, double* d, double* du, double* du2, int* ipiv, int* info);
+void sgttrs_(const char* trans, const int* n, const int* nrhs, const float* dl, const float* d,
+             const float* du, const float* du2, const int* ipiv, float* b, const int* ldb,
+             int* info, std::size_t trans_length);
+void dgttrs_(const char* trans, const int* n, const int* nrhs, const double* dl, const double* d,
+             const double* du, const double* du2, const int* ipiv, double* b, const int* ldb,
+             int* info, std::size_t trans_length);
+}
+
+namespace {
+
+template <class T>
+void bm_factored(benchmark::State& state, Shape shape, int threads) {
+  Problem<T>& p = problem<T>();
+  const Diagonals<T>& m = diagonals<T>(shape);
+  const BatchLayout layout = layout_of(shape);
+  tridiff::FactorOptions factor_options;
+  factor_options.threads = threads;
+  const auto factors =
+      tridiff::factor(m.sub.data(), m.diag.data(), m.super.data(), layout, factor_options);
+  tridiff::FactoredSolveOptions options;
+  options.threads = threads;
+  triad_bytes_per_second(threads);
+  for (auto _ : state) {
+    tridiff::solve(factors, p.rhs.data(), p.x.data(), layout, options);
+    benchmark::ClobberMemory();
+  }
+  check_solution(state, p, layout);
+  set_counters(state, 5.0 * sizeof(T) * kElements, double(layout.count), double(kElements),
+               threads);
+}
+
+void gttrf(int n, float* dl, float* d, float* du, float* du2, int* ipiv) {
+  int info = 0;
+  sgttrf_(&n, dl, d, du, du2, ipiv, &info);
+}
+void gttrf(int n, double* dl, double* d, double* du, double* du2, int* ipiv) {
+  int info = 0;
+  dgttrf_(&n, dl, d, du, du2, ipiv, &info);
+}
+void gttrs(int n, const float* dl, const float* d, const float* du, const float* du2,
+           const int* ipiv, float* b) {
+  const int nrhs = 1;
+  int info = 0;
+  sgttrs_("N", &n, &nrhs, dl, d, du, du2, ipiv, b, &n, &info, 1);
+}
+void gttrs(int n, const double* dl, const double* d, const double* du, const double* du2,
+           const int* ipiv, double* b) {
+  const int nrhs = 1;
+  int info = 0;
+  dgttrs_("N", &n, &nrhs, dl, d, du, du2, ipiv, b, &n, &info, 1);
+}
+
+// The rows shape only: ?gttrs needs contiguous systems.
+template <class T>
+void bm_lapack_gttrs(benchmark::State& state, int threads) {
+  Problem<T>& p = problem<T>();
+  const Diagonals<T>& m = diagonals<T>(Shape::Rows);
+  const BatchLayout layout = layout_of(Shape::Rows);
+  const ptrdiff_t n = layout.n;
+  Array<T> dl(kElements), d(kElements), du(kElements), du2(kElements);
+  Array<int> ipiv(kElements);
+#pragma omp parallel for num_threads(threads) schedule(static)
+  for (ptrdiff_t s = 0; s < layout.count; ++s) {
+    const ptrdiff_t o = layout.offset(s, 0);
+    std::memcpy(dl.data() + o, m.sub.data() + o + 1, (n - 1) * sizeof(T));
+    std::memcpy(d.data() + o, m.diag.data() + o, n * sizeof(T));
+    std::memcpy(du.data() + o, m.super.data() + o, (n - 1) * sizeof(T));
+    gttrf(int(n), dl.data() + o, d.data() + o, du.data() + o, du2.data() + o, ipiv.data() + o);
+  }
+  triad_bytes_per_second(threads);
+  for (auto _ : state) {
+#pragma omp parallel for num_threads(threads) schedule(static)
+    for (ptrdiff_t s = 0; s < layout.count; ++s) {
+      const ptrdiff_t o = layout.offset(s, 0);
+      std::memcpy(p.x.data() + o, p.rhs.data() + o, n * sizeof(T));
+      gttrs(int(n), dl.data() + o, d.data() + o, du.data() + o, du2.data() + o, ipiv.data() + o,
+            p.x.data() + o);
+    }
+    benchmark::ClobberMemory();
+  }
+  check_solution(state, p, layout);
+  set_counters(state, (6.0 * sizeof(T) + sizeof(int)) * kElements, double(layout.count),
+               double(kElements), threads);
+}
+
+void bm_mixed(benchmark::State& state, Shape shape, int threads) {
+  Problem<double>& p = problem<double>();
+  const Diagonals<double>& m = diagonals<double>(shape);
+  const BatchLayout layout = layout_of(shape);
+  tridiff::FactorOptions factor_options;
+  factor_options.threads = threads;
+  const auto factors = tridiff::factor_as<float>(m.sub.data(), m.diag.data(), m.super.data(),
+                                                 layout, factor_options);
+  tridiff::MixedOptions options;
+  options.threads = threads;
+  triad_bytes_per_second(threads);
+  std::ptrdiff_t not_converged = 0;
+  for (auto _ : state) {
+    not_converged += tridiff::solve_mixed(factors, m.sub.data(), m.diag.data(), m.super.data(),
+                                          p.rhs.data(), p.x.data(), layout, options)
+                         .not_converged;
+    benchmark::ClobberMemory();
+  }
+  if (not_converged > 0) return state.SkipWithError("mixed precision did not converge");
+  // A double backward error, not just a correct answer: check_solution's bound is looser.
+  const double error = backward_error(p, layout);
+  if (!(error <= 8 * std::numeric_limits<double>::epsilon()))
+    return state.SkipWithError(("backward error " + std::to_string(error)).c_str());
+  set_counters(state, 5.0 * sizeof(double) * kElements, double(layout.count), double(kElements),
+               threads);
+}
+
+[[maybe_unused]] const bool kFactoredRegistered = [] {
+  for (Shape shape : {Shape::Rows, Shape::Columns})
+    for (int threads : kThreadCounts) {
+      const std::string where = name_of(shape), t = threads_arg(threads);
+      finish(benchmark::RegisterBenchmark(
+          join({"BM_solvers_factored", "float", "general", where, t}).c_str(), bm_factored<float>,
+          shape, threads));
+      finish(benchmark::RegisterBenchmark(
+          join({"BM_solvers_factored", "double", "general", where, t}).c_str(), bm_factored<double>,
+          shape, threads));
+      finish(benchmark::RegisterBenchmark(
+          join({"BM_solvers_mixed", "double", "general", where, t}).c_str(), bm_mixed, shape,
+          threads));
+      if (shape == Shape::Rows) {
+        finish(benchmark::RegisterBenchmark(
+            join({"BM_solvers_lapack_gttrs", "float", "general", where, t}).c_str(),
+            bm_lapack_gttrs<float>, threads));
+        finish(benchmark::RegisterBenchmark(
+            join({"BM_solvers_lapack_gttrs", "double", "general", where, t}).c_str(),
+            bm_lapack_gttrs<double>, threads));
+      }
+    }
+  return true;
+}();
+
+}  // namespace

@@ -128,15 +128,6 @@ inline void require_comm(MPI_Comm comm) {
   if (comm == MPI_COMM_NULL) throw InvalidArgument("comm", "is MPI_COMM_NULL");
 }
 
-// The slabs' lanes step through systems by system_stride alone: a second batch dimension (the
-// lines of a 3-D grid, BatchLayout::outer_count) is not supported across ranks yet.
-inline void require_one_batch_dimension(const BatchLayout& layout) {
-  if (layout.outer_count != 1)
-    throw InvalidArgument("outer_count", "must be 1 in the distributed solve (got " +
-                                             std::to_string(layout.outer_count) +
-                                             "): call it once per outer batch");
-}
-
 inline void require_options(const Options& options) {
   resolve_threads(options.threads);
   if (options.global_n < 0)
@@ -485,7 +476,7 @@ Report solve(const T* sub, const T* diag, const T* super, const T* rhs, T* x,
   Failure local;
   capture(local, 0, [&] {
     validate_layout(layout);
-    require_one_batch_dimension(layout);
+    tridiff::detail::require_one_batch_dimension(layout, "the distributed solve");
     require_options(options);
     tridiff::detail::require_pointer(sub, "sub");
     tridiff::detail::require_pointer(diag, "diag");
@@ -517,7 +508,7 @@ Report solve_diffusion(const real_t<T>* beta, const T* rhs, T* x, const BatchLay
   Failure local;
   capture(local, 0, [&] {
     validate_layout(layout);
-    require_one_batch_dimension(layout);
+    tridiff::detail::require_one_batch_dimension(layout, "the distributed solve");
     require_options(options);
     tridiff::detail::require_pointer(beta, "beta");
     tridiff::detail::require_pointer(rhs, "rhs");

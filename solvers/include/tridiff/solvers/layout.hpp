@@ -96,6 +96,14 @@ inline void require_nested(LayoutDimension (&dims)[3]) {
   }
 }
 
+// For the calls that take one batch dimension only (the factored solve, refinement).
+inline void require_one_batch_dimension(const BatchLayout& layout, const char* call) {
+  if (layout.outer_count != 1)
+    throw InvalidArgument("outer_count", std::string("must be 1 in ") + call + " (got " +
+                                             std::to_string(layout.outer_count) +
+                                             "): call it once per outer batch");
+}
+
 }  // namespace detail
 
 // Throws InvalidArgument unless the layout describes n >= 1 unknowns in count >= 1 systems

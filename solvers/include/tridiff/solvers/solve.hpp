@@ -11,6 +11,7 @@
 #include <mutex>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #ifdef _OPENMP
@@ -225,6 +226,14 @@ void for_each_chunk(const BatchLayout& layout, std::ptrdiff_t chunk, int threads
     }
   }
   if (error) std::rethrow_exception(error);
+}
+
+// for_each_chunk over `count` systems in one batch dimension.
+template <class T, class Body>
+void for_each_chunk(std::ptrdiff_t count, std::ptrdiff_t chunk, int threads, Body&& body) {
+  BatchLayout systems;
+  systems.count = count;
+  for_each_chunk<T>(systems, chunk, threads, std::forward<Body>(body));
 }
 
 template <class T>
