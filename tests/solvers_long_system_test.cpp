@@ -83,12 +83,11 @@ void expect_accurate(const System<T>& s, const std::vector<T>& x, Method method)
   EXPECT_LE(forward_error(x, reference), condition_bound(s) * bound);
 }
 
-// Sizes around the path's edges: the first sizes on it, 2^16 + 1, and group boundaries of
-// the cut (a group is `lanes` parts of about kPartRowsTarget rows).
+// Sizes on the path: its first size, 2^16 + 1, and one row past three whole groups of parts
+// (a group is `lanes` parts of about kPartRowsTarget rows); the small sizes and the part
+// boundaries are the next test's.
 std::vector<std::ptrdiff_t> long_sizes(std::ptrdiff_t lanes) {
-  const std::ptrdiff_t first = detail::kPartitionedMinRows;
-  const std::ptrdiff_t group = lanes * detail::kPartRowsTarget;
-  return {first - 1, first, first + 1, (1 << 16) + 1, 2 * group - 1, 3 * group + 1};
+  return {detail::kPartitionedMinRows, (1 << 16) + 1, 3 * lanes * detail::kPartRowsTarget + 1};
 }
 
 TYPED_TEST(LongSystem, ThomasAndAutoMatchTheReference) {
@@ -114,11 +113,14 @@ TYPED_TEST(LongSystem, ThomasAndAutoMatchTheReference) {
   }
 }
 
-// The kernel itself at the sizes solve() sends elsewhere: one part, parts of one block, a
-// system shorter than one group (rows past its end are padding).
+// The kernel itself at the sizes solve() sends elsewhere: one part, a system shorter than one
+// group (rows past its end are padding), and a last part full, one row short and one row over.
 TYPED_TEST(LongSystem, PartsInLanesMatchDenseLuAtEverySmallSize) {
   using T = TypeParam;
-  for (std::ptrdiff_t n : {1, 2, 3, 4, 31, 32, 33, 63, 64, 65, 1000, 4097}) {
+  const auto cut = detail::make_part_layout<T, detail::kPartLanes<T>>(20000, 1);
+  const std::ptrdiff_t full = (20000 + cut.rows - 1) / cut.rows * cut.rows;
+  for (std::ptrdiff_t n : {std::ptrdiff_t(1), std::ptrdiff_t(2), std::ptrdiff_t(3),
+                           std::ptrdiff_t(17), std::ptrdiff_t(1000), full - 1, full, full + 1}) {
     const auto system = dominant_system<T>(n, 100 + n);
     for (int threads : {1, 2}) {
       SCOPED_TRACE(::testing::Message() << "n = " << n << ", " << threads << " threads");
@@ -205,7 +207,7 @@ TYPED_TEST(LongSystem, NonDominantSystemIsPivotedByAutoAndRefusedByThomas) {
 TYPED_TEST(LongSystem, ZeroPivotInAPartNamesItsRowAndKeepsRhs) {
   using T = TypeParam;
   const std::ptrdiff_t n = std::ptrdiff_t(1) << 16;
-  const auto cut = detail::make_part_layout<detail::kPartLanes<T>>(n, 2);
+  const auto cut = detail::make_part_layout<T, detail::kPartLanes<T>>(n, 2);
   for (std::ptrdiff_t row : {cut.rows * 5, cut.rows * 5 + 1, cut.rows * 7 - 1, cut.rows * 9 + 17}) {
     SCOPED_TRACE(::testing::Message() << "row " << row << " (parts of " << cut.rows << ")");
     auto system = dominant_system<T>(n, 21);

@@ -307,7 +307,7 @@ inline constexpr std::ptrdiff_t kPartitionedMinRows = std::ptrdiff_t(1) << 15;
 template <class T>
 std::ptrdiff_t solve_partitioned(const SystemView<T>& s, Strided<T> x, int threads) {
   if (!partitioned_lanes(s, x, threads)) return 0;
-  return make_part_layout<kPartLanes<T>>(s.n, threads).parts;
+  return make_part_layout<T, kPartLanes<T>>(s.n, threads).parts;
 }
 
 // Pivoting on one system, without the batch path's copies: the result goes straight into x

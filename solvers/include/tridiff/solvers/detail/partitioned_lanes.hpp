@@ -28,7 +28,7 @@ namespace tridiff::detail {
 
 // Parts per vector: one 64-byte vector of scalars.
 template <class T>
-inline constexpr int kPartLanes = static_cast<int>(64 / sizeof(T) >= 2 ? 64 / sizeof(T) : 2);
+inline constexpr int kPartLanes = static_cast<int>(128 / sizeof(T) >= 2 ? 128 / sizeof(T) : 2);
 
 // How a system of n rows is cut: `parts` = groups * W parts of `rows` rows each. The last
 // parts may run past row n-1; the rows past it are identity rows (x = 0) that couple to
@@ -39,18 +39,23 @@ struct PartLayout {
 
 // Rows per part aimed at: a group's intermediates (3 * rows * W scalars) stay well inside
 // L2, and the reduced system (2 rows per part) stays small next to n.
-inline constexpr std::ptrdiff_t kPartRowsTarget = 1024;
+inline constexpr std::ptrdiff_t kPartRowsTarget = 512;
 
-// Rows per part are a multiple of kTransposeBlock, so each block of a part is whole.
-template <int W>
+// Rows per part are an odd number of 64-byte lines: each part then starts on a line (aligned
+// streaming stores), and the W parts read side by side fall into different cache sets (with
+// 512 floats per part, 2 KiB apart, all W streams of an array share two sets of the L1, and
+// the in-cache speed halves).
+template <class T, int W>
 PartLayout make_part_layout(std::ptrdiff_t n, int threads) {
+  constexpr std::ptrdiff_t line = 64 / sizeof(T) > 0 ? 64 / sizeof(T) : 1;
   const std::ptrdiff_t per_group = W * kPartRowsTarget;
   // Enough groups for every thread, and as many as the target part length asks for.
   std::ptrdiff_t groups = std::max<std::ptrdiff_t>((n + per_group - 1) / per_group, 1);
   groups = std::max<std::ptrdiff_t>(groups, std::min<std::ptrdiff_t>(threads, n / (W * 64)));
   const std::ptrdiff_t rows_needed = (n + groups * W - 1) / (groups * W);
-  const std::ptrdiff_t rows =
-      (rows_needed + kTransposeBlock - 1) / kTransposeBlock * kTransposeBlock;
+  std::ptrdiff_t lines = (rows_needed + line - 1) / line;
+  lines += 1 - lines % 2;
+  const std::ptrdiff_t rows = lines * line;
   const std::ptrdiff_t used = (n + rows - 1) / rows;  // parts holding a row of the system
   groups = (used + W - 1) / W;
   return {n, rows, groups * W, groups};
@@ -104,23 +109,14 @@ inline real_t<T> zero_if_finite(const T& value) {
   return magnitude(value) * 0;
 }
 
-// Per-lane health of a sweep: the smallest margin of a pivot above the vanishing threshold
-// (must stay positive), and a probe that is NaN iff a value produced was not finite.
-template <class T, int W>
-struct LaneHealth {
-  real_t<T> margin[W], probe[W];
-  LaneHealth() {
-    for (int l = 0; l < W; ++l) {
-      margin[l] = std::numeric_limits<real_t<T>>::max();
-      probe[l] = 0;
-    }
-  }
-  bool ok() const {
-    bool healthy = true;
-    for (int l = 0; l < W; ++l) healthy = healthy && margin[l] > 0 && probe[l] == 0;
-    return healthy;
-  }
-};
+// Whether every lane stayed healthy: each pivot's margin above the vanishing threshold
+// positive, and the probe (a sum of zero_if_finite terms) zero.
+template <class R, int W>
+bool lanes_healthy(const R* margin, const R* probe) {
+  bool healthy = true;
+  for (int l = 0; l < W; ++l) healthy = healthy && margin[l] > 0 && probe[l] == 0;
+  return healthy;
+}
 
 // Step 1 on one group: writes its parts' two reduced rows. `work` holds 3 * rows * W
 // scalars (the eliminated rows, in L2) and `block` 4 * kTransposeBlock * W.
@@ -135,7 +131,8 @@ bool reduce_part_group(const PartGroup<T, W>& group, std::ptrdiff_t rows, T* wor
   T* const kept_a = work;  // row j: a'_j x_s + x_j + c'_j x_{j+1} = d'_j
   T* const kept_c = work + rows * W;
   T* const kept_d = work + 2 * rows * W;
-  LaneHealth<T, W> health;
+  // Locals, not a struct's members: GCC then keeps them in registers.
+  R margin[W], probe[W];
   // Row 0, normalised: first_a x_{s-1} + x_s + first_c x_{s+1} = first_d.
   T first_a[W], first_c[W], first_d[W];
   // The row before, eliminated; before row 1 it is "x_s = 0 - (-1) x_s", so that row 1 takes
@@ -156,8 +153,8 @@ bool reduce_part_group(const PartGroup<T, W>& group, std::ptrdiff_t rows, T* wor
           first_a[l] = a[l] * inverse;
           first_c[l] = c[l] * inverse;
           first_d[l] = d[l] * inverse;
-          health.margin[l] = magnitude(b[l]) * (1 - tolerance);
-          health.probe[l] =
+          margin[l] = magnitude(b[l]) * (1 - tolerance);
+          probe[l] =
               zero_if_finite(first_a[l]) + zero_if_finite(first_c[l]) + zero_if_finite(first_d[l]);
           previous_a[l] = T(-1);
           previous_c[l] = T(0);
@@ -173,7 +170,7 @@ bool reduce_part_group(const PartGroup<T, W>& group, std::ptrdiff_t rows, T* wor
         const T eliminated = a[l] * previous_c[l];
         const T pivot = b[l] - eliminated;
         const R scale = magnitude(b[l]) + magnitude(eliminated);
-        health.margin[l] = std::min(health.margin[l], magnitude(pivot) - tolerance * scale);
+        margin[l] = std::min(margin[l], magnitude(pivot) - tolerance * scale);
         const T inverse = T(1) / pivot;
         previous_d[l] = (d[l] - a[l] * previous_d[l]) * inverse;
         previous_a[l] = -a[l] * previous_a[l] * inverse;
@@ -181,8 +178,8 @@ bool reduce_part_group(const PartGroup<T, W>& group, std::ptrdiff_t rows, T* wor
         ka[l] = previous_a[l];
         kc[l] = previous_c[l];
         kd[l] = previous_d[l];
-        health.probe[l] += zero_if_finite(previous_d[l]) + zero_if_finite(previous_a[l]) +
-                           zero_if_finite(b[l]) + zero_if_finite(eliminated);
+        probe[l] += zero_if_finite(previous_d[l]) + zero_if_finite(previous_a[l]) +
+                    zero_if_finite(b[l]) + zero_if_finite(eliminated);
       }
     }
   }
@@ -211,8 +208,7 @@ bool reduce_part_group(const PartGroup<T, W>& group, std::ptrdiff_t rows, T* wor
     // Row 0 with x_{s+1} substituted from row 1.
     const T coupling = first_c[l] * next_a[l];
     const T pivot = T(1) - coupling;
-    health.margin[l] =
-        std::min(health.margin[l], magnitude(pivot) - tolerance * (1 + magnitude(coupling)));
+    margin[l] = std::min(margin[l], magnitude(pivot) - tolerance * (1 + magnitude(coupling)));
     const T inverse = T(1) / pivot;
     reduced.sub[base + 2 * l] = first_a[l] * inverse;
     reduced.super[base + 2 * l] = -first_c[l] * next_c[l] * inverse;
@@ -221,11 +217,11 @@ bool reduce_part_group(const PartGroup<T, W>& group, std::ptrdiff_t rows, T* wor
     reduced.sub[base + 2 * l + 1] = previous_a[l];
     reduced.super[base + 2 * l + 1] = previous_c[l];
     reduced.rhs[base + 2 * l + 1] = previous_d[l];
-    health.probe[l] += zero_if_finite(reduced.rhs[base + 2 * l]) +
-                       zero_if_finite(reduced.sub[base + 2 * l]) +
-                       zero_if_finite(reduced.super[base + 2 * l]);
+    probe[l] += zero_if_finite(reduced.rhs[base + 2 * l]) +
+                zero_if_finite(reduced.sub[base + 2 * l]) +
+                zero_if_finite(reduced.super[base + 2 * l]);
   }
-  return health.ok();
+  return lanes_healthy<R, W>(margin, probe);
 }
 
 // Step 2: solves the reduced system in place (its solution replaces `rhs`). `work` holds 2P
@@ -357,7 +353,7 @@ inline constexpr std::ptrdiff_t kStreamingBytes = std::ptrdiff_t(16) << 20;
 template <class T>
 bool partitioned_lanes(const SystemView<T>& s, Strided<T> x, int threads) {
   constexpr int W = kPartLanes<T>;
-  const PartLayout layout = make_part_layout<W>(s.n, threads);
+  const PartLayout layout = make_part_layout<T, W>(s.n, threads);
   const std::ptrdiff_t rows = layout.rows, m = 2 * layout.parts;
   const bool in_place = x.data == s.d.data;
   const bool direct = x.stride == 1 && !in_place;  // the solution goes straight into x
