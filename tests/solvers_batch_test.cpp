@@ -394,8 +394,8 @@ TYPED_TEST(SolverBatch, UnreadCornerEntriesDoNotAffectTheResult) {
       }
 }
 
-// One long system on two threads is split into parts (the partitioned Thomas method): still
-// within the Thomas bounds against the long-double LU.
+// One long system is split into parts (the partitioned Thomas method, parts in SIMD lanes):
+// still within the Thomas bounds against the long-double LU.
 TYPED_TEST(SolverBatch, LongSystemSplitAcrossThreadsMatchesLongDoubleLu) {
   using T = TypeParam;
   const std::ptrdiff_t n = std::ptrdiff_t(1) << 17;
@@ -407,7 +407,7 @@ TYPED_TEST(SolverBatch, LongSystemSplitAcrossThreadsMatchesLongDoubleLu) {
     std::vector<T> x(n);
     const auto report = solve(system.a.data(), system.b.data(), system.c.data(), system.d.data(),
                               x.data(), BatchLayout::single(n), with(method, 2));
-    EXPECT_EQ(report.parts, 2);
+    EXPECT_GT(report.parts, 1);
     const long double bound = backward_bound<T>(Method::Thomas, n);
     EXPECT_LE(backward_error(system, x), bound);
     EXPECT_LE(forward_error(x, reference), kappa * bound);

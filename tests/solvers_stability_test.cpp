@@ -124,8 +124,8 @@ TYPED_TEST(Stability, PivotingStaysWithinTenTimesLapackOnEveryClass) {
   expect_within_ten_times_lapack<TypeParam>(Method::Pivoting);
 }
 
-// One long system on several threads: Thomas, and Auto on a dominant matrix, split it into one
-// part per thread (the partitioned method, detail/partitioned.hpp) from
+// One long system on several threads: Thomas, and Auto on a dominant matrix, split it into
+// parts run in SIMD lanes (the partitioned method, detail/partitioned_lanes.hpp) from
 // detail::kPartitionedMinRows rows on; the smaller sizes above never reach it. Auto must still
 // stay within 10x of LAPACK, and must actually have split the system. Only the classes that
 // are dominant at this size: on the others Auto pivots, on one thread, as tested above.
@@ -146,7 +146,7 @@ TYPED_TEST(Stability, AutoOnFourThreadsStaysWithinTenTimesLapackOnLongSystems) {
       EXPECT_LE(ours.backward, backward_bound_without_lapack<T>());
       continue;
     }
-    EXPECT_EQ(ours.parts, kThreads);
+    EXPECT_GT(ours.parts, 1);
     EXPECT_LE(ours.forward, ten_times_lapack<T>(lapack.forward))
         << "LAPACK forward error " << static_cast<double>(lapack.forward);
     EXPECT_LE(ours.backward, ten_times_lapack<T>(lapack.backward))

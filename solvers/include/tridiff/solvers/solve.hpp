@@ -21,7 +21,7 @@
 #include "tridiff/solvers/detail/checks.hpp"
 #include "tridiff/solvers/detail/cyclic_reduction.hpp"
 #include "tridiff/solvers/detail/diffusion_form.hpp"
-#include "tridiff/solvers/detail/partitioned.hpp"
+#include "tridiff/solvers/detail/partitioned_lanes.hpp"
 #include "tridiff/solvers/detail/periodic.hpp"
 #include "tridiff/solvers/detail/pivoting.hpp"
 #include "tridiff/solvers/detail/thomas.hpp"
@@ -324,62 +324,76 @@ bool check_system_parallel(const SystemView<T>& s, std::ptrdiff_t system, Method
   return accept_dominance<T>(whole, system, method, refuse);
 }
 
-// Below this many rows a single system is not worth splitting across threads: the partitioned
-// method moves about twice the data of Thomas and needs a barrier.
+// From this many rows on, one system is solved by parts in SIMD lanes (on any number of
+// threads) rather than by one scalar Thomas sweep: the parts read the arrays twice, but with
+// the division chain spread over the lanes they run several times faster.
 inline constexpr std::ptrdiff_t kPartitionedMinRows = std::ptrdiff_t(1) << 15;
 
-// Thomas on one long system, split into one part per thread (detail/partitioned.hpp).
+// Thomas on one long system, cut into parts that run side by side in SIMD lanes, groups of
+// parts shared by the threads (detail/partitioned_lanes.hpp). Returns the number of parts, or
+// 0 if a pivot vanished or the solution overflowed (rhs is then untouched): the caller
+// re-solves by a method that names the row, or pivots.
 template <class T>
-int solve_partitioned(const SystemView<T>& s, Strided<T> x, int threads, std::ptrdiff_t system) {
+std::ptrdiff_t solve_partitioned(const SystemView<T>& s, Strided<T> x, int threads) {
+  if (!partitioned_lanes(s, x, threads)) return 0;
+  return make_part_layout<T, kPartLanes<T>>(s.n, threads).parts;
+}
+
+// Pivoting on one system, without the batch path's copies: the result goes straight into x
+// unless the solve is in place, and the inputs are checked for finite values by vectorised
+// passes. Throws like solve_one.
+template <class T>
+void solve_single_pivoting(const SystemView<T>& s, Strided<T> x, std::ptrdiff_t system) {
+  using R = real_t<T>;
   const std::ptrdiff_t n = s.n;
-  const int parts = static_cast<int>(std::min<std::ptrdiff_t>(threads, n / kMinPartRows));
-  std::vector<std::ptrdiff_t> bounds(parts + 1), bad(parts + 1, -1);
-  for (int p = 0; p <= parts; ++p) bounds[p] = n * p / parts;
-  static thread_local AlignedBuffer<T> buffer;
-  buffer.resize(3 * n + partition_reduced_workspace(parts));
-  T* eliminated = buffer.data();
-  T* coupling_a = eliminated + n;
-  T* coupling_c = coupling_a + n;
-  T* reduced_work = coupling_c + n;
-  std::vector<char> finite(parts, 1);
-  bool proceed = false;
+  require_finite_matrix(s, system);
+  R probe = 0;
+  if (s.d.stride == 1) {
+    const T* d = s.d.data;
+#pragma omp simd reduction(+ : probe)
+    for (std::ptrdiff_t i = 0; i < n; ++i) probe += magnitude(d[i]) * 0;
+  }
+  if (!(probe == 0) || s.d.stride != 1) require_finite_rhs(s, system);
   const bool in_place = x.data == s.d.data;
-#pragma omp parallel num_threads(parts)
-  {
-#pragma omp for schedule(static)
-    for (int p = 0; p < parts; ++p)
-      bad[p] = partition_reduce(bounds[p], bounds[p + 1], n, s.a, s.b, s.c, s.d, eliminated,
-                                coupling_a, coupling_c);
-#pragma omp single
-    {
-      proceed = std::all_of(bad.begin(), bad.begin() + parts, [](auto b) { return b < 0; });
-      if (proceed) {
-        bad[parts] = partition_solve_reduced<T>(parts, bounds.data(), eliminated, coupling_a,
-                                                coupling_c, reduced_work);
-        proceed = bad[parts] < 0;
-      }
-    }
-    // In place, the solution is finished in the workspace and copied out only if it is
-    // finite, so that an overflow leaves rhs as it was.
-    const Strided<T> target = in_place ? Strided<T>{eliminated, 1} : x;
-    if (proceed) {
-#pragma omp for schedule(static)
-      for (int p = 0; p < parts; ++p)
-        finite[p] =
-            partition_finish(bounds[p], bounds[p + 1], eliminated, coupling_a, coupling_c, target);
-      if (in_place && std::find(finite.begin(), finite.end(), 0) == finite.end()) {
-#pragma omp for schedule(static)
-        for (int p = 0; p < parts; ++p)
-          for (std::ptrdiff_t i = bounds[p]; i < bounds[p + 1]; ++i) x[i] = eliminated[i];
+  static thread_local AlignedBuffer<T> work;
+  work.resize(pivoting_workspace(n) + (in_place ? n : 0));
+  const Strided<T> result = in_place ? Strided<T>{work.data() + pivoting_workspace(n), 1} : x;
+  const std::ptrdiff_t bad = pivoting(n, s.a, s.b, s.c, s.d, result, work.data());
+  if (bad >= 0) report_breakdown(s, system, bad, to_string(Method::Pivoting));
+  probe = 0;
+  if (result.stride == 1) {
+    const T* values = result.data;
+#pragma omp simd reduction(+ : probe)
+    for (std::ptrdiff_t i = 0; i < n; ++i) probe += magnitude(values[i]) * 0;
+  } else {
+    for (std::ptrdiff_t i = 0; i < n; ++i) probe += magnitude(result[i]) * 0;
+  }
+  if (!(probe == 0)) report_breakdown(s, system, -1, to_string(Method::Pivoting));
+  if (in_place)
+    for (std::ptrdiff_t i = 0; i < n; ++i) x[i] = result[i];
+  if (work.size() * std::ptrdiff_t(sizeof(T)) > (std::ptrdiff_t(256) << 20)) work = {};
+}
+
+// One long system (count == 1, not periodic) by Thomas, Auto or Pivoting. Thomas and Auto run
+// the parts in lanes on dominant matrices; where that breaks down, Thomas re-solves with the
+// scalar kernel (which solves it or names the row) and Auto pivots.
+template <class T>
+SolveReport solve_single(const SystemView<T>& view, Strided<T> x, Method method, bool check,
+                         int threads) {
+  const Method fast = method == Method::Auto ? Method::Thomas : method;
+  if (fast == Method::Thomas) {
+    if (!check || check_system_parallel(view, 0, method, method != Method::Auto, threads)) {
+      const std::ptrdiff_t parts = solve_partitioned(view, x, threads);
+      if (parts > 0) return {fast, 0, static_cast<int>(parts)};
+      if (method == Method::Thomas) {
+        AlignedBuffer<T> work;
+        solve_one(view, x, Method::Thomas, false, 0, work, 0);
+        return {fast, 0, 1};
       }
     }
   }
-  if (buffer.size() * std::ptrdiff_t(sizeof(T)) > (std::ptrdiff_t(256) << 20)) buffer = {};
-  const auto first_bad = std::find_if(bad.begin(), bad.end(), [](auto b) { return b >= 0; });
-  if (first_bad != bad.end()) report_breakdown(s, system, *first_bad, "thomas (partitioned)");
-  if (std::find(finite.begin(), finite.end(), 0) != finite.end())
-    report_breakdown(s, system, -1, "thomas (partitioned)");
-  return parts;
+  solve_single_pivoting(view, x, 0);
+  return {fast, method == Method::Auto ? 1 : 0, 1};
 }
 
 // Thomas on a chunk of up to W systems, one SIMD lane each. Interleaved systems (image
@@ -497,14 +511,10 @@ SolveReport solve(const T* sub, const T* diag, const T* super, const T* rhs, T* 
   std::ptrdiff_t pivoted = 0;
   std::mutex count_guard;
 
-  if (layout.systems() == 1 && threads > 1 && fast == Method::Thomas && !options.periodic &&
-      layout.n >= kPartitionedMinRows) {
-    const auto view = system_view(sub, diag, super, rhs, layout, 0, false);
-    if (!check || check_system_parallel(view, 0, method, method != Method::Auto, threads)) {
-      const int parts = solve_partitioned(view, Strided<T>{x, layout.row_stride}, threads, 0);
-      return {fast, 0, parts};
-    }
-  }
+  if (layout.systems() == 1 && !options.periodic && layout.n >= kPartitionedMinRows &&
+      (fast == Method::Thomas || fast == Method::Pivoting))
+    return solve_single(system_view(sub, diag, super, rhs, layout, 0, false),
+                        Strided<T>{x, layout.row_stride}, method, check, threads);
 
   auto solve_chunk = [&](std::ptrdiff_t first, std::ptrdiff_t systems, Scratch<T>& scratch) {
     if (lanes && fills_lanes<T>(systems) &&

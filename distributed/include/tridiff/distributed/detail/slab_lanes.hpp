@@ -1,10 +1,11 @@
 // The two local steps of the distributed solve on one rank's slab of rows, W systems at a time
 // (one SIMD lane each): the modified Thomas reduction (PaScaL_TDMA; Laszlo, Giles & Appleyard
 // 2016) that leaves two boundary rows per system, and the finish from the boundary unknowns.
-// The maths is tridiff/solvers/detail/partitioned.hpp's; it is written again here in lanes
-// because that kernel is scalar, needs 3 rows per part and masks the sub-diagonal of its part's
-// first row by the *local* index (its part is part of one array), while a rank's slab may hold
-// 1 or 2 rows and its first row couples to the previous rank.
+// The maths is that of tridiff/solvers/detail/partitioned_lanes.hpp (one long system cut into
+// parts, the parts in lanes); it is written again here because there the lanes are parts of
+// one system with a fixed, cache-sized length, while here they are W systems of one slab that
+// may hold 1 or 2 rows and whose first row couples to the previous rank. (Merging the two
+// kernels is open work.)
 #pragma once
 
 #include <algorithm>
@@ -80,7 +81,7 @@ struct DiffusionRows {
 // Rows 0 and m-1 are this slab's two rows of the reduced system (with m = 1, the one row reads
 // a' x_{-1} + x_0 + c' x_1 = d'; with m = 2 both rows are only normalised). Keeping the forward
 // form of the other rows, and finishing by back substitution (finish_lanes), saves the stores
-// of a backward sweep that rewrites every row (as partitioned.hpp does).
+// of a backward sweep that rewrites every row.
 // probe[l] stays 0 unless a pivot vanished or a value is not finite in lane l.
 template <class T, int W, class Rows>
 void reduce_lanes(std::ptrdiff_t m, const Rows& rows, T* dp, T* ap, T* cp, std::ptrdiff_t pitch,
