@@ -107,6 +107,7 @@ enum class Outcome {
   Refused,    // NumericalError: not diagonally dominant, unsafe for a pivot-free method
   Singular,   // NumericalError: zero or vanishing pivot (LAPACK: info > 0)
   Overflow,   // NumericalError: the solution overflowed
+  Inaccurate,  // NumericalError: the answer failed the backward-error check (cancellation)
   Error,      // any other exception
   NonFinite,  // returned normally with a non-finite x: a bug, the API promises never to
 };
@@ -117,6 +118,7 @@ inline const char* to_string(Outcome outcome) {
     case Outcome::Refused: return "refused";
     case Outcome::Singular: return "singular";
     case Outcome::Overflow: return "overflow";
+    case Outcome::Inaccurate: return "inaccurate";
     case Outcome::Error: return "error";
     case Outcome::NonFinite: return "nonfinite";
   }
@@ -130,6 +132,7 @@ inline Outcome classify(const NumericalError& error) {
   if (what.find("not diagonally dominant") != std::string::npos) return Outcome::Refused;
   if (what.find("pivot") != std::string::npos) return Outcome::Singular;
   if (what.find("overflow") != std::string::npos) return Outcome::Overflow;
+  if (what.find("backward error") != std::string::npos) return Outcome::Inaccurate;
   return Outcome::Error;
 }
 

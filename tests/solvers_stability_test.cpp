@@ -194,7 +194,8 @@ TYPED_TEST(Stability, PivotFreeMethodsRefuseNonDominantMatrices) {
 // a backward error within backward_bound and a forward error within 10x LAPACK's
 // (where ?gtsv gives an answer), or throw NumericalError for a vanishing pivot or an overflow
 // (CR, PCR and the hybrid do on rows_scaled_1e+-30 in float: their multipliers a[i]/b[i-1],
-// quotients of rows 1e60 apart, overflow). They must never return a non-finite x, refuse a
+// quotients of rows 1e60 apart, overflow) or for an answer that failed their backward-error
+// check (PCR and the hybrid on dorr_1e-4). They must never return a non-finite x, refuse a
 // dominant matrix, or throw anything else.
 TYPED_TEST(Stability, PivotFreeMethodsSolveDominantMatricesWithinBoundOrThrow) {
   using T = TypeParam;
@@ -207,7 +208,9 @@ TYPED_TEST(Stability, PivotFreeMethodsSolveDominantMatricesWithinBoundOrThrow) {
       for (Method method : kPivotFreeMethods) {
         SCOPED_TRACE(where(matrix_class, n, method));
         const Measurement ours = measure_tridiff(system, method, reference);
-        if (ours.outcome == Outcome::Singular || ours.outcome == Outcome::Overflow) continue;
+        if (ours.outcome == Outcome::Singular || ours.outcome == Outcome::Overflow ||
+            ours.outcome == Outcome::Inaccurate)
+          continue;
         ASSERT_EQ(ours.outcome, Outcome::Solved) << to_string(ours.outcome) << ": " << ours.message;
         EXPECT_LE(ours.backward, backward_bound<T>(method, n));
         if (lapack.outcome == Outcome::Solved) {
