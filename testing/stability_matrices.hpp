@@ -350,6 +350,16 @@ System<T> dorr_system(std::ptrdiff_t n, std::uint64_t seed, long double theta) {
   return s;
 }
 
+// theta = 0.01 (MATLAB's default): the columns of A^-1 grow by a factor 1 + (1/2 - i h) h / theta
+// from row to row up to the middle, kappa ~ e^(1/(8 theta)) ~ 3e5 for large n: forward errors
+// still mean something in float.
+template <class T>
+System<T> dorr_1e2_system(std::ptrdiff_t n, std::uint64_t seed) {
+  return dorr_system<T>(n, seed, 1e-2L);
+}
+
+// theta = 1e-4, the case where PCR lost every digit: kappa ~ e^(1/(8 theta)) = e^1250 for large
+// n (already ~1e178 at n = 512), beyond every precision, so only backward errors mean anything.
 template <class T>
 System<T> dorr_1e4_system(std::ptrdiff_t n, std::uint64_t seed) {
   return dorr_system<T>(n, seed, 1e-4L);
@@ -456,7 +466,9 @@ inline const MatrixClass kStabilityClasses[] = {
     TRIDIFF_STABILITY_CLASS("rows_near_underflow",
                             "strictly dominant, half the rows x 10^min_exponent10",
                             Dominance::Dominant, rows_near_underflow_system),
-    TRIDIFF_STABILITY_CLASS("dorr_1e-4", "gallery('dorr', n, 1e-4): weakly dominant M-matrix",
+    TRIDIFF_STABILITY_CLASS("dorr_1e-2", "gallery('dorr', n, 0.01): weakly dominant M-matrix",
+                            Dominance::Dominant, dorr_1e2_system),
+    TRIDIFF_STABILITY_CLASS("dorr_1e-4", "gallery('dorr', n, 1e-4): kappa ~ e^1250, backward only",
                             Dominance::Dominant, dorr_1e4_system),
     TRIDIFF_STABILITY_CLASS("clement", "gallery('clement', n): zero diagonal, integer entries",
                             Dominance::NotDominant, clement_system),

@@ -143,6 +143,7 @@ struct Measurement {
   std::string message;  // the exception's message, if any
   int info = 0;         // LAPACK only
   int parts = 1;        // tridiff only: SolveReport::parts (> 1: partitioned Thomas ran)
+  std::ptrdiff_t pivoted = 0;  // tridiff only: SolveReport::pivoted_systems
 };
 
 template <class T>
@@ -192,6 +193,7 @@ Measurement measure_tridiff(const System<T>& s, Method method, const WideVector<
   }
   Measurement m = measure_solution(s, x, reference);
   m.parts = report.parts;
+  m.pivoted = report.pivoted_systems;
   return m;
 }
 

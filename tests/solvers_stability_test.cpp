@@ -32,6 +32,15 @@ long double ten_times_lapack(long double lapack_error) {
   return kTimesLapack * std::max(lapack_error, lapack_floor<T>());
 }
 
+// Where kappa_1(A) u >= 1 (LAPACK's estimate, condition_estimate) no method can promise one
+// correct digit, and forward errors, LAPACK's and ours alike, are noise: only the backward
+// errors are compared there. dorr_1e-4 is such a class (kappa ~ e^(1/(8 theta)) = e^1250 for
+// large n, beyond even the long-double reference).
+template <class T>
+bool forward_error_is_meaningful(const System<T>& s) {
+  return condition_estimate(s) * unit_roundoff<T>() < 1;
+}
+
 // Diagonal dominance by rows or by columns, the property the pivot-free methods require,
 // decided in long double with the library's slack of 4 eps (detail::first_non_dominant_row)
 // so that the weakly dominant classes count as dominant.
@@ -105,8 +114,10 @@ void expect_within_ten_times_lapack(Method method) {
         continue;
       }
       ASSERT_EQ(ours.outcome, Outcome::Solved) << ours.message;
-      EXPECT_LE(ours.forward, ten_times_lapack<T>(lapack.forward))
-          << "LAPACK forward error " << static_cast<double>(lapack.forward);
+      if (forward_error_is_meaningful(system)) {
+        EXPECT_LE(ours.forward, ten_times_lapack<T>(lapack.forward))
+            << "LAPACK forward error " << static_cast<double>(lapack.forward);
+      }
       EXPECT_LE(ours.backward, ten_times_lapack<T>(lapack.backward))
           << "LAPACK backward error " << static_cast<double>(lapack.backward);
     }
@@ -146,9 +157,12 @@ TYPED_TEST(Stability, AutoOnFourThreadsStaysWithinTenTimesLapackOnLongSystems) {
       EXPECT_LE(ours.backward, backward_bound_without_lapack<T>());
       continue;
     }
-    EXPECT_EQ(ours.parts, kThreads);
-    EXPECT_LE(ours.forward, ten_times_lapack<T>(lapack.forward))
-        << "LAPACK forward error " << static_cast<double>(lapack.forward);
+    // Unless Thomas broke down and Auto fell back to pivoting (dorr_1e-4), on one thread.
+    EXPECT_EQ(ours.parts, ours.pivoted > 0 ? 1 : kThreads);
+    if (forward_error_is_meaningful(system)) {
+      EXPECT_LE(ours.forward, ten_times_lapack<T>(lapack.forward))
+          << "LAPACK forward error " << static_cast<double>(lapack.forward);
+    }
     EXPECT_LE(ours.backward, ten_times_lapack<T>(lapack.backward))
         << "LAPACK backward error " << static_cast<double>(lapack.backward);
   }
@@ -213,7 +227,7 @@ TYPED_TEST(Stability, PivotFreeMethodsSolveDominantMatricesWithinBoundOrThrow) {
           continue;
         ASSERT_EQ(ours.outcome, Outcome::Solved) << to_string(ours.outcome) << ": " << ours.message;
         EXPECT_LE(ours.backward, backward_bound<T>(method, n));
-        if (lapack.outcome == Outcome::Solved) {
+        if (lapack.outcome == Outcome::Solved && forward_error_is_meaningful(system)) {
           EXPECT_LE(ours.forward, ten_times_lapack<T>(lapack.forward))
               << "LAPACK forward error " << static_cast<double>(lapack.forward);
         }
