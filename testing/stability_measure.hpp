@@ -103,13 +103,13 @@ WideVector<T> refined_reference(const System<T>& s) {
 }
 
 enum class Outcome {
-  Solved,     // returned a finite x
-  Refused,    // NumericalError: not diagonally dominant, unsafe for a pivot-free method
-  Singular,   // NumericalError: zero or vanishing pivot (LAPACK: info > 0)
-  Overflow,   // NumericalError: the solution overflowed
+  Solved,      // returned a finite x
+  Refused,     // NumericalError: not diagonally dominant, unsafe for a pivot-free method
+  Singular,    // NumericalError: zero or vanishing pivot (LAPACK: info > 0)
+  Overflow,    // NumericalError: the solution overflowed
   Inaccurate,  // NumericalError: the answer failed the backward-error check (cancellation)
-  Error,      // any other exception
-  NonFinite,  // returned normally with a non-finite x: a bug, the API promises never to
+  Error,       // any other exception
+  NonFinite,   // returned normally with a non-finite x: a bug, the API promises never to
 };
 
 inline const char* to_string(Outcome outcome) {
@@ -140,9 +140,9 @@ struct Measurement {
   Outcome outcome = Outcome::Error;
   long double forward = std::numeric_limits<long double>::quiet_NaN();   // forward_error
   long double backward = std::numeric_limits<long double>::quiet_NaN();  // backward_error
-  std::string message;  // the exception's message, if any
-  int info = 0;         // LAPACK only
-  int parts = 1;        // tridiff only: SolveReport::parts (> 1: partitioned Thomas ran)
+  std::string message;         // the exception's message, if any
+  int info = 0;                // LAPACK only
+  int parts = 1;               // tridiff only: SolveReport::parts (> 1: partitioned Thomas ran)
   std::ptrdiff_t pivoted = 0;  // tridiff only: SolveReport::pivoted_systems
 };
 

@@ -908,8 +908,7 @@ TEST(SolverMethodTable, EveryMethodOnceAndByName) {
         ADD_FAILURE() << "no error, Method(" << value << "), entry point " << entry;
       } catch (const InvalidArgument& e) {
         EXPECT_EQ(e.argument(), "method") << e.what();
-        EXPECT_NE(std::string(e.what()).find(std::to_string(value)), std::string::npos)
-            << e.what();
+        EXPECT_NE(std::string(e.what()).find(std::to_string(value)), std::string::npos) << e.what();
       }
       EXPECT_EQ(in_place[0], 2) << "nothing written";
     }

@@ -146,9 +146,9 @@ TYPED_TEST(HardMatrices, DiffusionWithRhsNearMaxIsSolvedWithoutOverflow) {
     for (std::ptrdiff_t count : {1, 70})
       for (bool columns : {false, true})
         for (bool in_place : {false, true}) {
-          SCOPED_TRACE(::testing::Message() << "n " << n << ", count " << count
-                                            << (columns ? ", columns" : ", rows")
-                                            << (in_place ? ", in place" : ""));
+          SCOPED_TRACE(::testing::Message()
+                       << "n " << n << ", count " << count << (columns ? ", columns" : ", rows")
+                       << (in_place ? ", in place" : ""));
           const BatchLayout layout =
               columns ? BatchLayout::columns(n, count, count) : BatchLayout::rows(n, count, n);
           const std::vector<T> beta(layout.extent(), T(1));
@@ -314,7 +314,8 @@ struct StatusBatch {
 
   // In place; with `info`, the status goes there.
   SolveReport solve_in_place_with(Form form, std::vector<T>& x, SolveOptions options) const {
-    if (form == Form::Diffusion) return solve_diffusion(beta.data(), x.data(), x.data(), layout, options);
+    if (form == Form::Diffusion)
+      return solve_diffusion(beta.data(), x.data(), x.data(), layout, options);
     return solve_in_place(a.data(), b.data(), c.data(), x.data(), layout, options);
   }
 };
@@ -345,8 +346,8 @@ void expect_status_per_system(bool with_info) {
           for (int threads : {1, 2}) {
             SCOPED_TRACE(::testing::Message()
                          << (form == Form::General ? "general, " : "diffusion, ") << name_of(shape)
-                         << ", " << bad.size() << " bad, " << to_string(method) << ", "
-                         << threads << " threads" << (with_info ? ", info" : ""));
+                         << ", " << bad.size() << " bad, " << to_string(method) << ", " << threads
+                         << " threads" << (with_info ? ", info" : ""));
             std::vector<T> x = batch.d;
             std::vector<std::ptrdiff_t> info(with_info ? count : 0, 99);
             SolveOptions options = using_method(method, threads);
@@ -438,8 +439,9 @@ TEST(StatusPerSystemArguments, LongListsOfFailuresAreCut) {
     EXPECT_EQ(e.row(), 1);
     EXPECT_EQ(e.failed_count(), 19);
     EXPECT_EQ(e.failed_systems(), (std::vector<std::ptrdiff_t>{3, 5, 7, 9, 11, 13, 15, 17}));
-    EXPECT_NE(std::string(e.what()).find("19 of 40 systems failed: 3, 5, 7, 9, 11, 13, 15, 17, ..."),
-              std::string::npos)
+    EXPECT_NE(
+        std::string(e.what()).find("19 of 40 systems failed: 3, 5, 7, 9, 11, 13, 15, 17, ..."),
+        std::string::npos)
         << e.what();
   }
   for (std::ptrdiff_t s = 0; s < count; s += 2)

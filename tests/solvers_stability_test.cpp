@@ -34,8 +34,7 @@ long double ten_times_lapack(long double lapack_error) {
 
 // Where kappa_1(A) u >= 1 (LAPACK's estimate, condition_estimate) no method can promise one
 // correct digit, and forward errors, LAPACK's and ours alike, are noise: only the backward
-// errors are compared there. dorr_1e-4 is such a class (kappa ~ e^(1/(8 theta)) = e^1250 for
-// large n, beyond even the long-double reference).
+// errors are compared there: dorr_1e-4 (kappa_1 ~ 1e20), and dorr_1e-2 in float at large n.
 template <class T>
 bool forward_error_is_meaningful(const System<T>& s) {
   return condition_estimate(s) * unit_roundoff<T>() < 1;

@@ -258,8 +258,8 @@ class BatchStatus {
       : info_(info), n_(layout.n), count_(layout.count) {
     if (!info.empty() && std::ptrdiff_t(info.size()) != layout.count)
       throw InvalidArgument("info", "has " + std::to_string(info.size()) +
-                                        " entries for a batch of " +
-                                        std::to_string(layout.count) + " systems");
+                                        " entries for a batch of " + std::to_string(layout.count) +
+                                        " systems");
     std::fill(info.begin(), info.end(), 0);
   }
 
@@ -282,8 +282,7 @@ class BatchStatus {
     std::vector<std::ptrdiff_t> first(failed_.begin(), failed_.begin() + listed);
     std::string others;
     if (total > 1) {
-      others = " (" + std::to_string(total) + " of " + std::to_string(count_) +
-               " systems failed: ";
+      others = " (" + std::to_string(total) + " of " + std::to_string(count_) + " systems failed: ";
       for (std::size_t k = 0; k < listed; ++k) others += (k ? ", " : "") + std::to_string(first[k]);
       others += std::string(total > std::ptrdiff_t(listed) ? ", ..." : "") +
                 "; every other system is solved)";
@@ -371,11 +370,11 @@ void solve_one(const SystemView<T>& s, Strided<T> x, Method method, bool periodi
   T* result = work.data();
   T* scaled_rhs = result + n;
   T* kernel_work = scaled_rhs + n;
-  const std::ptrdiff_t bad = solve_rescaling_on_overflow(
-      n, s.d, result, scaled_rhs, [&](Strided<const T> d, T* out) {
-        return periodic ? detail::periodic(n, s.a, s.b, s.c, d, Strided<T>{out, 1}, kernel_work,
-                                           inner)
-                        : inner(n, s.a, s.b, s.c, d, Strided<T>{out, 1}, kernel_work);
+  const std::ptrdiff_t bad =
+      solve_rescaling_on_overflow(n, s.d, result, scaled_rhs, [&](Strided<const T> d, T* out) {
+        return periodic
+                   ? detail::periodic(n, s.a, s.b, s.c, d, Strided<T>{out, 1}, kernel_work, inner)
+                   : inner(n, s.a, s.b, s.c, d, Strided<T>{out, 1}, kernel_work);
       });
   if (bad >= 0) report_breakdown(s, system, bad, to_string(method));
   require_finite_solution(result, n, system, to_string(method));
