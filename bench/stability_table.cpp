@@ -10,7 +10,8 @@
 // (lapack_floor in testing/stability_measure.hpp says why eps) and LAPACK's estimate of
 // kappa_1(A). Outcomes: solved, refused (NumericalError: not dominant, unsafe for a pivot-free
 // method), singular (NumericalError: zero or vanishing pivot; for LAPACK, info > 0), overflow
-// (NumericalError: the solution overflowed), error (anything else), nonfinite (a non-finite x
+// (NumericalError: the solution overflowed), inaccurate (NumericalError: the answer failed the
+// reductions' backward-error check), error (anything else), nonfinite (a non-finite x
 // returned without an exception: a bug). A summary goes to stderr: per class and precision,
 // per method, the worst ratio max(forward, backward) over the sizes, and what happened at the
 // sizes where tridiff or LAPACK did not solve. About 10 s on 2 cores with the default sizes.

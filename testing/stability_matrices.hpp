@@ -302,6 +302,117 @@ System<T> near_underflow_system(std::ptrdiff_t n, std::uint64_t seed) {
   return stability::dominant_at_scale<T>(n, seed, scale);
 }
 
+// Half of the rows (at random) times 10^(max_exponent10 - 2), 1e36 in float, 1e306 in double:
+// those rows' entries reach ~3e36 (float), a tenth of the way to FLT_MAX / 10, while their
+// neighbours are O(1). Quotients across rows are 1e36 or 1e-36: representable in float, but
+// a product of two of them is not.
+template <class T>
+System<T> rows_near_overflow_system(std::ptrdiff_t n, std::uint64_t seed) {
+  const long double high = std::pow(10.0L, std::numeric_limits<T>::max_exponent10 - 2);
+  return row_scaled(stability::dominant_at_scale<T>(n, seed, 1), seed, 1, high);
+}
+
+// Half of the rows (at random) times 10^min_exponent10, 1e-37 in float, 1e-307 in double:
+// those rows' smallest entries, ~5e-38 in float, are just above the smallest normal number
+// (FLT_MIN ~ 1.2e-38), so any product with them, or a quotient by a neighbour, is subnormal.
+template <class T>
+System<T> rows_near_underflow_system(std::ptrdiff_t n, std::uint64_t seed) {
+  const long double low = std::pow(10.0L, std::numeric_limits<T>::min_exponent10);
+  return row_scaled(stability::dominant_at_scale<T>(n, seed, 1), seed, low, 1);
+}
+
+// gallery('dorr', n, theta) of MATLAB (Higham's Test Matrix Toolbox; F. W. Dorr, Math. Comp.
+// 25 (1971) 271-283): with h = 1/(n+1) and m = floor((n+1)/2), rows i = 1..n (1-based) have
+//   i <= m:  sub = -theta/h^2,              super = sub - (1/2 - i h)/h,
+//   i >  m:  super = -theta/h^2,            sub = super + (1/2 - i h)/h,
+// and diag = -(sub + super): an upwind scheme for a singularly perturbed two-point problem.
+// An M-matrix, row diagonally dominant (strictly only in the first and the last row, by
+// theta (n+1)^2), and ill conditioned for small theta: the columns of A^-1 vary greatly in
+// norm. PCR and the hybrid lost every digit on it (backward error 0.5 in double at n = 512,
+// theta = 1e-4) while each of their levels passed the vanishing-pivot test. Computed in long
+// double, rounded once (each row stays dominant within the library's 4 eps slack). Random rhs.
+template <class T>
+System<T> dorr_system(std::ptrdiff_t n, std::uint64_t seed, long double theta) {
+  stability::Draw draw(seed);
+  const long double h = 1.0L / static_cast<long double>(n + 1), term = theta / (h * h);
+  const std::ptrdiff_t m = (n + 1) / 2;
+  auto s = stability::zero_system<T>(n);
+  for (std::ptrdiff_t k = 1; k <= n; ++k) {
+    const long double drift = (0.5L - static_cast<long double>(k) * h) / h;
+    const long double sub = k <= m ? -term : -term + drift;
+    const long double super = k <= m ? -term - drift : -term;
+    const std::ptrdiff_t i = k - 1;
+    s.a[i] = i > 0 ? static_cast<T>(sub) : T(0);
+    s.c[i] = i + 1 < n ? static_cast<T>(super) : T(0);
+    s.b[i] = static_cast<T>(-(sub + super));
+    s.d[i] = static_cast<T>(draw.uniform(-1, 1));
+  }
+  return s;
+}
+
+// theta = 0.01 (MATLAB's default). dgtcon's kappa_1 at the table's seeds: 5e4, 9e9, 5e13 for
+// n = 16, 1000, 65537: forward errors mean something in double, in float only at small n.
+template <class T>
+System<T> dorr_1e2_system(std::ptrdiff_t n, std::uint64_t seed) {
+  return dorr_system<T>(n, seed, 1e-2L);
+}
+
+// theta = 1e-4, the case where PCR lost every digit. dgtcon's kappa_1: 5e18, 8e20, 2e20 for
+// n = 16, 1000, 65537 (kappa u >> 1 in both precisions): only backward errors mean anything.
+// Thomas overflows at n = 65537 in both; Auto then pivots.
+template <class T>
+System<T> dorr_1e4_system(std::ptrdiff_t n, std::uint64_t seed) {
+  return dorr_system<T>(n, seed, 1e-4L);
+}
+
+// gallery('clement', n) of MATLAB (Clement 1959; Higham's Test Matrix Toolbox): zero diagonal,
+// sub-diagonal n-1, n-2, ..., 1, super-diagonal 1, 2, ..., n-1 (entry (i+1, i) is n - i and
+// (i, i+1) is i, 1-based). Its eigenvalues are the integers +-(n-1), +-(n-3), ...; for odd n
+// one of them is 0, so for odd n the class is the Clement matrix of order n - 1 with a last
+// row and column of the identity, nonsingular. Not dominant (the diagonal is zero): every
+// step of pivoting interchanges rows; the pivot-free methods must refuse it. Far from normal:
+// dgtcon's kappa_1 is 9e2 at n = 16 and 9e151 at n = 1000, and partial pivoting meets an
+// exactly zero pivot (underflow) from n = 1000 in float and at 65537 in double, ?gtsv at the
+// same row; Eigen's sparse LU in long double does too at 65537 (no reference there).
+template <class T>
+System<T> clement_system(std::ptrdiff_t n, std::uint64_t seed) {
+  stability::Draw draw(seed);
+  const std::ptrdiff_t order = n % 2 == 0 ? n : n - 1;
+  auto s = stability::zero_system<T>(n);
+  for (std::ptrdiff_t i = 0; i < order; ++i) {
+    s.a[i] = i > 0 ? static_cast<T>(order - i) : T(0);
+    s.c[i] = i + 1 < order ? static_cast<T>(i + 1) : T(0);
+  }
+  if (order < n) s.b[n - 1] = T(1);
+  for (std::ptrdiff_t i = 0; i < n; ++i) s.d[i] = static_cast<T>(draw.uniform(-1, 1));
+  return s;
+}
+
+// Kahan-type graded rows: gallery('kahan', n, 1.2) is diag(1, s, ..., s^(n-1)) times the unit
+// upper triangle with -c above the diagonal (s = sin 1.2, c = cos 1.2); its tridiagonal
+// counterpart here is diag(r^i) tridiag(-c, 1, -c), row i graded by r^i with
+// r = max(s, 1e-30^(1/(n-1))) so that the last rows stay far from underflow in float. Dominant
+// by rows (2c = 0.72 < 1) but not by columns once r < 0.5 (small n): a column meets c r^(i-1)
+// from the row above, up to 1/r times its own diagonal. Quotients of neighbouring rows are
+// 1/r; row scaling leaves Thomas unchanged but not the multipliers of CR and of pivoting.
+// The rhs is graded with its row, so x is O(1).
+template <class T>
+System<T> kahan_tridiagonal_system(std::ptrdiff_t n, std::uint64_t seed) {
+  stability::Draw draw(seed);
+  const long double sine = std::sin(1.2L), cosine = std::cos(1.2L);
+  const long double ratio =
+      n > 1 ? std::max(sine, std::pow(1e-30L, 1.0L / static_cast<long double>(n - 1))) : 1;
+  auto s = stability::zero_system<T>(n);
+  long double grade = 1;
+  for (std::ptrdiff_t i = 0; i < n; ++i, grade *= ratio) {
+    s.a[i] = i > 0 ? static_cast<T>(-cosine * grade) : T(0);
+    s.b[i] = static_cast<T>(grade);
+    s.c[i] = i + 1 < n ? static_cast<T>(-cosine * grade) : T(0);
+    s.d[i] = static_cast<T>(draw.uniform(-1, 1) * grade);
+  }
+  return s;
+}
+
 // One class of matrices: a name for tables and test traces, what it is, whether the
 // pivot-free methods may accept it, and its generator for each precision.
 struct MatrixClass {
@@ -352,6 +463,20 @@ inline const MatrixClass kStabilityClasses[] = {
                             Dominance::Dominant, near_overflow_system),
     TRIDIFF_STABILITY_CLASS("near_underflow", "dominant, entries ~ 10^min_exponent10, normal",
                             Dominance::Dominant, near_underflow_system),
+    TRIDIFF_STABILITY_CLASS("rows_near_overflow",
+                            "strictly dominant, half the rows x 10^(max_exponent10 - 2)",
+                            Dominance::Dominant, rows_near_overflow_system),
+    TRIDIFF_STABILITY_CLASS("rows_near_underflow",
+                            "strictly dominant, half the rows x 10^min_exponent10",
+                            Dominance::Dominant, rows_near_underflow_system),
+    TRIDIFF_STABILITY_CLASS("dorr_1e-2", "gallery('dorr', n, 0.01): weakly dominant M-matrix",
+                            Dominance::Dominant, dorr_1e2_system),
+    TRIDIFF_STABILITY_CLASS("dorr_1e-4", "gallery('dorr', n, 1e-4): kappa_1 ~ 1e20, backward only",
+                            Dominance::Dominant, dorr_1e4_system),
+    TRIDIFF_STABILITY_CLASS("clement", "gallery('clement', n): zero diagonal, integer entries",
+                            Dominance::NotDominant, clement_system),
+    TRIDIFF_STABILITY_CLASS("kahan_tridiagonal", "diag(r^i) tridiag(-cos 1.2, 1, -cos 1.2)",
+                            Dominance::Dominant, kahan_tridiagonal_system),
 };
 
 #undef TRIDIFF_STABILITY_CLASS

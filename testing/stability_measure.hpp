@@ -103,12 +103,13 @@ WideVector<T> refined_reference(const System<T>& s) {
 }
 
 enum class Outcome {
-  Solved,     // returned a finite x
-  Refused,    // NumericalError: not diagonally dominant, unsafe for a pivot-free method
-  Singular,   // NumericalError: zero or vanishing pivot (LAPACK: info > 0)
-  Overflow,   // NumericalError: the solution overflowed
-  Error,      // any other exception
-  NonFinite,  // returned normally with a non-finite x: a bug, the API promises never to
+  Solved,      // returned a finite x
+  Refused,     // NumericalError: not diagonally dominant, unsafe for a pivot-free method
+  Singular,    // NumericalError: zero or vanishing pivot (LAPACK: info > 0)
+  Overflow,    // NumericalError: the solution overflowed
+  Inaccurate,  // NumericalError: the answer failed the backward-error check (cancellation)
+  Error,       // any other exception
+  NonFinite,   // returned normally with a non-finite x: a bug, the API promises never to
 };
 
 inline const char* to_string(Outcome outcome) {
@@ -117,6 +118,7 @@ inline const char* to_string(Outcome outcome) {
     case Outcome::Refused: return "refused";
     case Outcome::Singular: return "singular";
     case Outcome::Overflow: return "overflow";
+    case Outcome::Inaccurate: return "inaccurate";
     case Outcome::Error: return "error";
     case Outcome::NonFinite: return "nonfinite";
   }
@@ -130,6 +132,7 @@ inline Outcome classify(const NumericalError& error) {
   if (what.find("not diagonally dominant") != std::string::npos) return Outcome::Refused;
   if (what.find("pivot") != std::string::npos) return Outcome::Singular;
   if (what.find("overflow") != std::string::npos) return Outcome::Overflow;
+  if (what.find("backward error") != std::string::npos) return Outcome::Inaccurate;
   return Outcome::Error;
 }
 
@@ -137,9 +140,10 @@ struct Measurement {
   Outcome outcome = Outcome::Error;
   long double forward = std::numeric_limits<long double>::quiet_NaN();   // forward_error
   long double backward = std::numeric_limits<long double>::quiet_NaN();  // backward_error
-  std::string message;  // the exception's message, if any
-  int info = 0;         // LAPACK only
-  int parts = 1;        // tridiff only: SolveReport::parts (> 1: partitioned Thomas ran)
+  std::string message;         // the exception's message, if any
+  int info = 0;                // LAPACK only
+  int parts = 1;               // tridiff only: SolveReport::parts (> 1: partitioned Thomas ran)
+  std::ptrdiff_t pivoted = 0;  // tridiff only: SolveReport::pivoted_systems
 };
 
 template <class T>
@@ -189,6 +193,7 @@ Measurement measure_tridiff(const System<T>& s, Method method, const WideVector<
   }
   Measurement m = measure_solution(s, x, reference);
   m.parts = report.parts;
+  m.pivoted = report.pivoted_systems;
   return m;
 }
 

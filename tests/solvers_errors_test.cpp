@@ -747,7 +747,8 @@ TYPED_TEST(SolverErrors, DiffusionWithHugeRhsNeverReturnsNonFinite) {
       }
 }
 
-// solve.hpp: "On an exception ... an in-place solve leaves rhs as it was." After a zero pivot
+// solve.hpp: "in an in-place solve its rhs is left as it was" (of a failing system; the other
+// systems are solved: solvers_hard_matrices_test checks both on batches). After a zero pivot
 // or an overflow in system s, the rhs of system s holds its old bits, by every method: a lone
 // system (scalar kernels), a batch (SIMD lanes for Thomas, image rows and columns), one long
 // system on two threads (partitioned Thomas).
@@ -878,7 +879,8 @@ TEST(ErrorMessages, NumericalErrorLeavesOutUnknownIndices) {
 }
 
 // The method table: every Method once, names unique and found again by method_named, an
-// unknown name refused with the list, an out-of-range Method refused by both entry points.
+// unknown name refused with the list, an out-of-range Method (17, 42) refused by every entry
+// point (solve, solve_in_place, solve_diffusion), before anything is written.
 TEST(SolverMethodTable, EveryMethodOnceAndByName) {
   ASSERT_EQ(std::size(kMethodTable), 6u);
   for (std::size_t i = 0; i < std::size(kMethodTable); ++i) {
@@ -900,19 +902,25 @@ TEST(SolverMethodTable, EveryMethodOnceAndByName) {
   }
   const double one[1] = {1}, beta[1] = {0}, rhs[1] = {2};
   double x[1] = {0};
-  SolveOptions bad;
-  bad.method = static_cast<Method>(17);
-  for (bool diffusion : {false, true}) {
-    try {
-      if (diffusion)
-        solve_diffusion(beta, rhs, x, BatchLayout::single(1), bad);
-      else
-        solve(one, one, one, rhs, x, BatchLayout::single(1), bad);
-      ADD_FAILURE() << "no error, diffusion " << diffusion;
-    } catch (const InvalidArgument& e) {
-      EXPECT_EQ(e.argument(), "method") << e.what();
+  for (int value : {17, 42})
+    for (int entry = 0; entry < 3; ++entry) {
+      SolveOptions bad;
+      bad.method = static_cast<Method>(value);
+      double in_place[1] = {2};
+      try {
+        if (entry == 0)
+          solve(one, one, one, rhs, x, BatchLayout::single(1), bad);
+        else if (entry == 1)
+          solve_in_place(one, one, one, in_place, BatchLayout::single(1), bad);
+        else
+          solve_diffusion(beta, rhs, x, BatchLayout::single(1), bad);
+        ADD_FAILURE() << "no error, Method(" << value << "), entry point " << entry;
+      } catch (const InvalidArgument& e) {
+        EXPECT_EQ(e.argument(), "method") << e.what();
+        EXPECT_NE(std::string(e.what()).find(std::to_string(value)), std::string::npos) << e.what();
+      }
+      EXPECT_EQ(in_place[0], 2) << "nothing written";
     }
-  }
   EXPECT_EQ(x[0], 0) << "nothing written";
 }
 

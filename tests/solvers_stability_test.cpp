@@ -32,6 +32,14 @@ long double ten_times_lapack(long double lapack_error) {
   return kTimesLapack * std::max(lapack_error, lapack_floor<T>());
 }
 
+// Where kappa_1(A) u >= 1 (LAPACK's estimate, condition_estimate) no method can promise one
+// correct digit, and forward errors, LAPACK's and ours alike, are noise: only the backward
+// errors are compared there: dorr_1e-4 (kappa_1 ~ 1e20), and dorr_1e-2 in float at large n.
+template <class T>
+bool forward_error_is_meaningful(const System<T>& s) {
+  return condition_estimate(s) * unit_roundoff<T>() < 1;
+}
+
 // Diagonal dominance by rows or by columns, the property the pivot-free methods require,
 // decided in long double with the library's slack of 4 eps (detail::first_non_dominant_row)
 // so that the weakly dominant classes count as dominant.
@@ -105,8 +113,10 @@ void expect_within_ten_times_lapack(Method method) {
         continue;
       }
       ASSERT_EQ(ours.outcome, Outcome::Solved) << ours.message;
-      EXPECT_LE(ours.forward, ten_times_lapack<T>(lapack.forward))
-          << "LAPACK forward error " << static_cast<double>(lapack.forward);
+      if (forward_error_is_meaningful(system)) {
+        EXPECT_LE(ours.forward, ten_times_lapack<T>(lapack.forward))
+            << "LAPACK forward error " << static_cast<double>(lapack.forward);
+      }
       EXPECT_LE(ours.backward, ten_times_lapack<T>(lapack.backward))
           << "LAPACK backward error " << static_cast<double>(lapack.backward);
     }
@@ -146,9 +156,12 @@ TYPED_TEST(Stability, AutoOnFourThreadsStaysWithinTenTimesLapackOnLongSystems) {
       EXPECT_LE(ours.backward, backward_bound_without_lapack<T>());
       continue;
     }
-    EXPECT_GT(ours.parts, 1);
-    EXPECT_LE(ours.forward, ten_times_lapack<T>(lapack.forward))
-        << "LAPACK forward error " << static_cast<double>(lapack.forward);
+    // Unless Thomas broke down and Auto fell back to pivoting (dorr_1e-4): one part then.
+    EXPECT_EQ(ours.parts > 1, ours.pivoted == 0);
+    if (forward_error_is_meaningful(system)) {
+      EXPECT_LE(ours.forward, ten_times_lapack<T>(lapack.forward))
+          << "LAPACK forward error " << static_cast<double>(lapack.forward);
+    }
     EXPECT_LE(ours.backward, ten_times_lapack<T>(lapack.backward))
         << "LAPACK backward error " << static_cast<double>(lapack.backward);
   }
@@ -194,7 +207,8 @@ TYPED_TEST(Stability, PivotFreeMethodsRefuseNonDominantMatrices) {
 // a backward error within backward_bound and a forward error within 10x LAPACK's
 // (where ?gtsv gives an answer), or throw NumericalError for a vanishing pivot or an overflow
 // (CR, PCR and the hybrid do on rows_scaled_1e+-30 in float: their multipliers a[i]/b[i-1],
-// quotients of rows 1e60 apart, overflow). They must never return a non-finite x, refuse a
+// quotients of rows 1e60 apart, overflow) or for an answer that failed their backward-error
+// check (PCR and the hybrid on dorr_1e-4). They must never return a non-finite x, refuse a
 // dominant matrix, or throw anything else.
 TYPED_TEST(Stability, PivotFreeMethodsSolveDominantMatricesWithinBoundOrThrow) {
   using T = TypeParam;
@@ -207,10 +221,12 @@ TYPED_TEST(Stability, PivotFreeMethodsSolveDominantMatricesWithinBoundOrThrow) {
       for (Method method : kPivotFreeMethods) {
         SCOPED_TRACE(where(matrix_class, n, method));
         const Measurement ours = measure_tridiff(system, method, reference);
-        if (ours.outcome == Outcome::Singular || ours.outcome == Outcome::Overflow) continue;
+        if (ours.outcome == Outcome::Singular || ours.outcome == Outcome::Overflow ||
+            ours.outcome == Outcome::Inaccurate)
+          continue;
         ASSERT_EQ(ours.outcome, Outcome::Solved) << to_string(ours.outcome) << ": " << ours.message;
         EXPECT_LE(ours.backward, backward_bound<T>(method, n));
-        if (lapack.outcome == Outcome::Solved) {
+        if (lapack.outcome == Outcome::Solved && forward_error_is_meaningful(system)) {
           EXPECT_LE(ours.forward, ten_times_lapack<T>(lapack.forward))
               << "LAPACK forward error " << static_cast<double>(lapack.forward);
         }

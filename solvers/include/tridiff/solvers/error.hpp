@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <string>
 #include <utility>
+#include <vector>
 
 namespace tridiff {
 
@@ -13,6 +14,21 @@ namespace tridiff {
 class Error : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
+
+  // A batch solve that failed in several systems throws the error of the first and lists the
+  // others here: the first failing systems, ascending (at most kListedFailures of them), and
+  // how many failed in all. Empty and 0 for an error not tied to the systems of a batch.
+  static constexpr std::size_t kListedFailures = 8;
+  const std::vector<std::ptrdiff_t>& failed_systems() const noexcept { return failed_systems_; }
+  std::ptrdiff_t failed_count() const noexcept { return failed_count_; }
+  void set_failures(std::vector<std::ptrdiff_t> first_systems, std::ptrdiff_t count) {
+    failed_systems_ = std::move(first_systems);
+    failed_count_ = count;
+  }
+
+ private:
+  std::vector<std::ptrdiff_t> failed_systems_;
+  std::ptrdiff_t failed_count_ = 0;
 };
 
 // An argument is wrong: a size, a stride, a pointer, a coefficient that is not finite.
@@ -58,8 +74,10 @@ class InvalidArgument : public Error {
 class NumericalError : public Error {
  public:
   NumericalError(std::ptrdiff_t system, std::ptrdiff_t row, const std::string& message)
-      : Error(compose(system, row, message)), system_(system), row_(row) {}
+      : Error(compose(system, row, message)), message_(message), system_(system), row_(row) {}
 
+  // What went wrong, without the system and row that what() puts before it.
+  const std::string& message() const noexcept { return message_; }
   std::ptrdiff_t system() const noexcept { return system_; }
   std::ptrdiff_t row() const noexcept { return row_; }
 
@@ -72,6 +90,7 @@ class NumericalError : public Error {
     return "tridiff: " + (where.empty() ? std::string() : where + ": ") + message;
   }
 
+  std::string message_;
   std::ptrdiff_t system_;
   std::ptrdiff_t row_;
 };

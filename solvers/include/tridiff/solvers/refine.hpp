@@ -19,16 +19,9 @@ namespace tridiff {
 
 namespace detail {
 
-// The scalar a residual is accumulated in: one step wider than the data (?gtrfs computes it in
-// the working precision; a wider one makes the refined answer accurate to the last bits).
-template <class T>
-struct wider {
-  using type = std::conditional_t<std::is_same_v<T, float>, double, long double>;
-};
-template <class T>
-struct wider<std::complex<T>> {
-  using type = std::complex<typename wider<T>::type>;
-};
+// The scalar a residual is accumulated in: one step wider than the data (detail::wider of
+// checks.hpp; ?gtrfs computes it in the working precision, a wider one makes the refined
+// answer accurate to the last bits).
 template <class T>
 using wider_t = typename wider<T>::type;
 

@@ -6,9 +6,11 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
 #include <exception>
 #include <limits>
 #include <mutex>
+#include <span>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -24,6 +26,7 @@
 #include "tridiff/solvers/detail/partitioned_lanes.hpp"
 #include "tridiff/solvers/detail/periodic.hpp"
 #include "tridiff/solvers/detail/pivoting.hpp"
+#include "tridiff/solvers/detail/subnormals.hpp"
 #include "tridiff/solvers/detail/thomas.hpp"
 #include "tridiff/solvers/detail/workspace.hpp"
 #include "tridiff/solvers/error.hpp"
@@ -119,12 +122,35 @@ struct SolveOptions {
   // clear it to skip the check when dominance is known, e.g. built into the problem.
   bool check_dominance = true;
   std::ptrdiff_t hybrid_pcr_below = 32;  // Hybrid: rows left when CR hands over to PCR
+  // Status per system instead of an exception, as LAPACK's INFO (and Kokkos' batched solvers):
+  // when given, `info` has one entry per system of the batch and the call throws no error for
+  // a single system; it writes info[s] = 0 for a solved system s, and for a system it could
+  // not solve (its x left unspecified, its rhs as it was in an in-place solve)
+  //   k > 0: the numbers broke down at row k - 1 (k is 1-based, as LAPACK's): a zero or
+  //          vanishing pivot, an overflowing solution, a matrix the chosen pivot-free method
+  //          refuses (not diagonally dominant) or whose answer failed the backward-error check;
+  //   k < 0: an input of the system is wrong (kInfoBadSub ... kInfoBadBeta below: a non-finite
+  //          coefficient or rhs, a negative beta).
+  // Every other system is solved. Errors of the call as a whole (a null pointer, a bad layout,
+  // an unknown method, an `info` of the wrong size) still throw InvalidArgument.
+  std::span<std::ptrdiff_t> info = {};
 };
+
+// The codes of SolveOptions::info for a system with a wrong input, after LAPACK's "-i: the
+// i-th argument had an illegal value" (the row is in what() of the error the call would throw
+// without `info`).
+inline constexpr std::ptrdiff_t kInfoBadSub = -1;    // sub (a coefficient not finite)
+inline constexpr std::ptrdiff_t kInfoBadDiag = -2;   // diag
+inline constexpr std::ptrdiff_t kInfoBadSuper = -3;  // super
+inline constexpr std::ptrdiff_t kInfoBadRhs = -4;    // rhs
+inline constexpr std::ptrdiff_t kInfoBadBeta = -5;   // beta (not finite, or negative)
 
 struct SolveReport {
   Method method = Method::Auto;        // the method that solved the dominant systems
-  std::ptrdiff_t pivoted_systems = 0;  // systems that Auto sent to the pivoting path
+  std::ptrdiff_t pivoted_systems = 0;  // systems Auto solved by pivoting (not dominant, or
+                                       // Thomas broke down on them)
   int parts = 1;                       // parts of a single long system solved in parallel
+  std::ptrdiff_t failed_systems = 0;   // systems not solved (non-zero only with options.info)
 };
 
 namespace detail {
@@ -236,11 +262,113 @@ void for_each_chunk(std::ptrdiff_t count, std::ptrdiff_t chunk, int threads, Bod
   for_each_chunk<T>(systems, chunk, threads, std::forward<Body>(body));
 }
 
+// The SolveOptions::info code of a system whose solve threw `error`.
+inline std::ptrdiff_t info_code(const std::exception_ptr& error, std::ptrdiff_t n) {
+  try {
+    std::rethrow_exception(error);
+  } catch (const InvalidArgument& e) {
+    const std::string& name = e.argument();
+    return name == "sub"     ? kInfoBadSub
+           : name == "diag"  ? kInfoBadDiag
+           : name == "super" ? kInfoBadSuper
+           : name == "beta"  ? kInfoBadBeta
+                             : kInfoBadRhs;
+  } catch (const NumericalError& e) {
+    return e.row() >= 0 ? e.row() + 1 : n;
+  }
+}
+
+// The outcome of every system of one call. A system that fails is recorded and the others go
+// on: with SolveOptions::info its code is written there, otherwise finish() throws the error
+// of the lowest failing system, naming the others. Errors that are not tridiff::Error (out of
+// memory) are not a system's fault and propagate at once.
+class BatchStatus {
+ public:
+  BatchStatus(std::span<std::ptrdiff_t> info, const BatchLayout& layout)
+      : info_(info), n_(layout.n), count_(layout.systems()) {
+    if (!info.empty() && std::ptrdiff_t(info.size()) != layout.systems())
+      throw InvalidArgument("info", "has " + std::to_string(info.size()) +
+                                        " entries for a batch of " +
+                                        std::to_string(layout.systems()) + " systems");
+    std::fill(info.begin(), info.end(), 0);
+  }
+
+  // Runs solve() for system s, recording the tridiff::Error it throws against s.
+  template <class Solve>
+  void run(std::ptrdiff_t s, Solve&& solve) {
+    try {
+      solve();
+    } catch (const Error&) {
+      record(s, std::current_exception());
+    }
+  }
+
+  // After the batch: the number of failed systems, or, without info, the first one's error.
+  std::ptrdiff_t finish() {
+    if (failed_.empty() || !info_.empty()) return std::ptrdiff_t(failed_.size());
+    std::sort(failed_.begin(), failed_.end());
+    const auto total = std::ptrdiff_t(failed_.size());
+    const auto listed = std::min<std::size_t>(failed_.size(), Error::kListedFailures);
+    std::vector<std::ptrdiff_t> first(failed_.begin(), failed_.begin() + listed);
+    std::string others;
+    if (total > 1) {
+      others = " (" + std::to_string(total) + " of " + std::to_string(count_) + " systems failed: ";
+      for (std::size_t k = 0; k < listed; ++k) others += (k ? ", " : "") + std::to_string(first[k]);
+      others += std::string(total > std::ptrdiff_t(listed) ? ", ..." : "") +
+                "; every other system is solved)";
+    }
+    try {
+      std::rethrow_exception(first_);
+    } catch (const InvalidArgument& e) {
+      InvalidArgument named(e.argument(), e.system(), e.row(), e.message() + others);
+      named.set_failures(std::move(first), total);
+      throw named;
+    } catch (const NumericalError& e) {
+      NumericalError named(e.system(), e.row(), e.message() + others);
+      named.set_failures(std::move(first), total);
+      throw named;
+    }
+  }
+
+ private:
+  void record(std::ptrdiff_t s, std::exception_ptr error) {
+    if (!info_.empty()) info_[s] = info_code(error, n_);  // one thread per system: no race
+    std::lock_guard<std::mutex> lock(guard_);
+    failed_.push_back(s);
+    if (s < first_system_) {
+      first_system_ = s;
+      first_ = std::move(error);
+    }
+  }
+
+  std::span<std::ptrdiff_t> info_;
+  std::ptrdiff_t n_, count_;
+  std::mutex guard_;
+  std::vector<std::ptrdiff_t> failed_;
+  std::exception_ptr first_;
+  std::ptrdiff_t first_system_ = std::numeric_limits<std::ptrdiff_t>::max();
+};
+
 template <class T>
 SystemView<T> system_view(const T* a, const T* b, const T* c, const T* d, const BatchLayout& layout,
                           std::ptrdiff_t s, bool periodic) {
   const std::ptrdiff_t o = layout.offset(s, 0), rs = layout.row_stride;
   return {{a + o, rs}, {b + o, rs}, {c + o, rs}, {d + o, rs}, layout.n, periodic};
+}
+
+inline std::string scientific(long double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.2Le", value);
+  return text;
+}
+
+// The normwise backward error the reduction methods promise (README, "Methods"):
+// 16u (1 + ceil(log2(n + 1))), one round of updates per level; 16u = 8 eps.
+template <class T>
+real_t<T> reduction_backward_bound(std::ptrdiff_t n) {
+  int levels = 0;
+  while ((std::ptrdiff_t(1) << levels) < n + 1) ++levels;
+  return 8 * epsilon<T> * real_t<T>(1 + levels);
 }
 
 // Solves one system with one non-Auto method; throws on breakdown.
@@ -268,15 +396,34 @@ void solve_one(const SystemView<T>& s, Strided<T> x, Method method, bool periodi
                                                                  : cyclic_reduction_workspace(n);
   // The solution is built in the workspace and copied out only on success, so a failed
   // in-place solve leaves rhs as it was.
-  work.resize(n + (periodic ? periodic_workspace(n, inner_work) : inner_work));
-  const Strided<T> result{work.data(), 1};
-  T* kernel_work = work.data() + n;
+  work.resize(2 * n + (periodic ? periodic_workspace(n, inner_work) : inner_work));
+  T* result = work.data();
+  T* scaled_rhs = result + n;
+  T* kernel_work = scaled_rhs + n;
   const std::ptrdiff_t bad =
-      periodic ? detail::periodic(n, s.a, s.b, s.c, s.d, result, kernel_work, inner)
-               : inner(n, s.a, s.b, s.c, s.d, result, kernel_work);
+      solve_rescaling_on_overflow(n, s.d, result, scaled_rhs, [&](Strided<const T> d, T* out) {
+        return periodic
+                   ? detail::periodic(n, s.a, s.b, s.c, d, Strided<T>{out, 1}, kernel_work, inner)
+                   : inner(n, s.a, s.b, s.c, d, Strided<T>{out, 1}, kernel_work);
+      });
   if (bad >= 0) report_breakdown(s, system, bad, to_string(method));
-  for (std::ptrdiff_t i = 0; i < n; ++i)
-    if (!is_finite(result[i])) report_breakdown(s, system, -1, to_string(method));
+  require_finite_solution(result, n, system, to_string(method));
+  if (method == Method::CyclicReduction || method == Method::ParallelCyclicReduction ||
+      method == Method::Hybrid) {
+    // Every level of a reduction passes the vanishing-pivot test, yet cancellation can build
+    // up over the levels: PCR on gallery('dorr', 512, 1e-4), dominant, returned x with a
+    // backward error of 0.5 in double. The check costs one pass, less than a level.
+    const BackwardError error = backward_error(s, Strided<const T>{result, 1});
+    const long double bound = reduction_backward_bound<T>(n);
+    if (!(error.value <= bound))
+      throw NumericalError(system, error.row,
+                           std::string("cancellation in ") + to_string(method) +
+                               ": the normwise backward error of its answer, " +
+                               scientific(error.value) + ", exceeds the method's bound " +
+                               scientific(bound) +
+                               " (largest residual at this row); Thomas, CR or Pivoting may "
+                               "solve it");
+  }
   for (std::ptrdiff_t i = 0; i < n; ++i) x[i] = result[i];
 }
 
@@ -380,6 +527,7 @@ void solve_single_pivoting(const SystemView<T>& s, Strided<T> x, std::ptrdiff_t 
 template <class T>
 SolveReport solve_single(const SystemView<T>& view, Strided<T> x, Method method, bool check,
                          int threads) {
+  const SubnormalsKept gradual_underflow;  // see subnormals.hpp
   const Method fast = method == Method::Auto ? Method::Thomas : method;
   if (fast == Method::Thomas) {
     if (!check || check_system_parallel(view, 0, method, method != Method::Auto, threads)) {
@@ -468,6 +616,29 @@ void require_valid_beta(Strided<const R> beta, std::ptrdiff_t n, bool periodic,
   }
 }
 
+// One diffusion system by the scalar kernel, into x only if the solution is finite. With rhs
+// near max() the forward sweep's d[i] + beta x[i-1] can overflow where x, a convex combination
+// of rhs, cannot: the system is then solved again with rhs scaled down.
+template <class T>
+void solve_diffusion_one(Strided<const real_t<T>> beta, Strided<const T> d, Strided<T> x,
+                         std::ptrdiff_t n, Scratch<T>& scratch, std::ptrdiff_t system) {
+  for (std::ptrdiff_t i = 0; i < n; ++i)
+    if (!is_finite(d[i])) throw InvalidArgument("rhs", system, i, "is not finite");
+  scratch.real_work.resize(n);
+  scratch.work.resize(2 * n);
+  T* result = scratch.work.data();
+  const std::ptrdiff_t bad = solve_rescaling_on_overflow(
+      n, d, result, result + n, [&](Strided<const T> rhs, T* out) -> std::ptrdiff_t {
+        diffusion_thomas(n, beta, rhs, Strided<T>{out, 1}, scratch.real_work.data());
+        return -1;
+      });
+  static_cast<void>(bad);  // the diffusion matrix has no vanishing pivot (every pivot >= 1)
+  for (std::ptrdiff_t i = 0; i < n; ++i)
+    if (!is_finite(result[i]))
+      throw NumericalError(system, i, "the solution overflowed: rhs is too large for this type");
+  for (std::ptrdiff_t i = 0; i < n; ++i) x[i] = result[i];
+}
+
 // The three diagonals of the diffusion system (seed 000 eq. 3.10).
 template <class R, class T>
 void expand_diffusion(Strided<const R> beta, std::ptrdiff_t n, bool periodic, T* a, T* b, T* c) {
@@ -485,8 +656,14 @@ void expand_diffusion(Strided<const R> beta, std::ptrdiff_t n, bool periodic, T*
 // Solves the batch  sub[i] x[i-1] + diag[i] x[i] + super[i] x[i+1] = rhs[i]  for every system
 // of `layout`. sub[0] and super[n-1] are not read unless options.periodic. x may be rhs
 // (in place) but must not overlap the diagonals. Throws InvalidArgument for bad arguments and
-// NumericalError for a singular system or a method that is unsafe for it. On an exception the
-// contents of x are unspecified, and an in-place solve leaves rhs as it was.
+// NumericalError for a singular system or a method that is unsafe for it.
+// A system that fails does not stop the others: every other system is solved, and then the
+// error of the lowest failing system is thrown, naming up to Error::kListedFailures failing
+// systems (what(), failed_systems(), failed_count()). The x of a failing system is
+// unspecified; in an in-place solve its rhs is left as it was. With options.info nothing is
+// thrown for a failing system: its code is written there instead.
+// The solvers run with gradual underflow on their threads, whatever the caller's FTZ/DAZ
+// state (detail/subnormals.hpp), and restore that state on return.
 template <class T>
 SolveReport solve(const T* sub, const T* diag, const T* super, const T* rhs, T* x,
                   const BatchLayout& layout, const SolveOptions& options = {}) {
@@ -508,33 +685,54 @@ SolveReport solve(const T* sub, const T* diag, const T* super, const T* rhs, T* 
   const bool check = method == Method::Auto || (options.check_dominance && is_pivot_free(method));
   constexpr int W = kLanes<T>;
   const bool lanes = fast == Method::Thomas && !options.periodic;
+  BatchStatus status(options.info, layout);
   std::ptrdiff_t pivoted = 0;
   std::mutex count_guard;
 
   if (layout.systems() == 1 && !options.periodic && layout.n >= kPartitionedMinRows &&
-      (fast == Method::Thomas || fast == Method::Pivoting))
-    return solve_single(system_view(sub, diag, super, rhs, layout, 0, false),
-                        Strided<T>{x, layout.row_stride}, method, check, threads);
+      (fast == Method::Thomas || fast == Method::Pivoting)) {
+    try {
+      return solve_single(system_view(sub, diag, super, rhs, layout, 0, false),
+                          Strided<T>{x, layout.row_stride}, method, check, threads);
+    } catch (const Error&) {
+      // With info the failure is recorded, not thrown: the system path below solves the
+      // system again and records it.
+      if (options.info.empty()) throw;
+    }
+  }
 
   auto solve_chunk = [&](std::ptrdiff_t first, std::ptrdiff_t systems, Scratch<T>& scratch) {
+    const SubnormalsKept gradual_underflow;  // see subnormals.hpp
     if (lanes && fills_lanes<T>(systems) &&
         solve_lanes(sub, diag, super, rhs, x, layout, first, systems, check, scratch))
       return;
-    bool dominant[W];
-    for (std::ptrdiff_t l = 0; l < systems; ++l) {
-      const auto view = system_view(sub, diag, super, rhs, layout, first + l, options.periodic);
-      dominant[l] = !check || check_system(view, first + l, method, method != Method::Auto);
-    }
-    // A lane broke down (re-solve one by one so the error names system and row), or this
-    // chunk needs per-system methods.
+    // A lane broke down (re-solve one by one so that each failure names its system and row
+    // and the others are solved), or this chunk needs per-system methods.
     std::ptrdiff_t local_pivoted = 0;
     for (std::ptrdiff_t l = 0; l < systems; ++l) {
       const std::ptrdiff_t s = first + l;
-      const auto view = system_view(sub, diag, super, rhs, layout, s, options.periodic);
-      local_pivoted += dominant[l] ? 0 : 1;
-      solve_one(view, Strided<T>{x + layout.offset(s, 0), layout.row_stride},
-                dominant[l] ? fast : Method::Pivoting, options.periodic, options.hybrid_pcr_below,
-                scratch.work, s);
+      status.run(s, [&] {
+        const auto view = system_view(sub, diag, super, rhs, layout, s, options.periodic);
+        const Strided<T> out{x + layout.offset(s, 0), layout.row_stride};
+        auto solve_by = [&](Method by) {
+          solve_one(view, out, by, options.periodic, options.hybrid_pcr_below, scratch.work, s);
+        };
+        if (check && !check_system(view, s, method, method != Method::Auto)) {
+          solve_by(Method::Pivoting);
+          ++local_pivoted;
+        } else if (method != Method::Auto) {
+          solve_by(fast);
+        } else {
+          try {
+            solve_by(Method::Thomas);
+          } catch (const NumericalError&) {
+            // Thomas can break down on a dominant matrix that is ill conditioned (float
+            // gallery('dorr', 4096, 1e-5) overflows) where pivoting, as ?gtsv, solves it.
+            solve_by(Method::Pivoting);
+            ++local_pivoted;
+          }
+        }
+      });
     }
     if (local_pivoted > 0) {
       std::lock_guard<std::mutex> lock(count_guard);
@@ -542,7 +740,8 @@ SolveReport solve(const T* sub, const T* diag, const T* super, const T* rhs, T* 
     }
   };
   for_each_chunk<T>(layout, lanes ? W : 1, threads, solve_chunk);
-  return {fast, pivoted};
+  const std::ptrdiff_t failed = status.finish();
+  return {fast, pivoted, 1, failed};
 }
 
 // In-place form: rhs_then_x holds the right-hand side on entry and the solution on return.
@@ -557,7 +756,8 @@ SolveReport solve_in_place(const T* sub, const T* diag, const T* super, T* rhs_t
 // with beta[-1] = beta[n-1] = 0 (insulated ends); with options.periodic, beta[n-1] links
 // x[n-1] to x[0] instead. beta is the conductance of the link from i to i+1, >= 0 and finite
 // (checked: InvalidArgument naming the system and row otherwise); the matrix is then strictly
-// diagonally dominant and every method is safe. beta has the layout of rhs and x.
+// diagonally dominant and every method is safe. beta has the layout of rhs and x. Failing
+// systems, options.info and the floating-point state as in solve().
 template <class T>
 SolveReport solve_diffusion(const real_t<T>* beta, const T* rhs, T* x, const BatchLayout& layout,
                             const SolveOptions& options = {}) {
@@ -576,8 +776,10 @@ SolveReport solve_diffusion(const real_t<T>* beta, const T* rhs, T* x, const Bat
   constexpr int W = kLanes<T>;
   const bool lanes = fast == Method::Thomas && !options.periodic;
   const std::ptrdiff_t n = layout.n;
+  BatchStatus status(options.info, layout);
 
   auto solve_chunk = [&](std::ptrdiff_t first, std::ptrdiff_t systems, Scratch<T>& scratch) {
+    const SubnormalsKept gradual_underflow;  // see subnormals.hpp
     if (lanes && fills_lanes<T>(systems) &&
         solve_diffusion_lanes(beta, rhs, x, layout, first, systems, scratch))
       return;
@@ -585,33 +787,28 @@ SolveReport solve_diffusion(const real_t<T>* beta, const T* rhs, T* x, const Bat
       const std::ptrdiff_t s = first + l;
       const std::ptrdiff_t o = layout.offset(s, 0);
       const Strided<const R> b{beta + o, layout.row_stride};
-      require_valid_beta(b, n, options.periodic, s);
       const Strided<const T> d{rhs + o, layout.row_stride};
       const Strided<T> out{x + o, layout.row_stride};
-      if (lanes) {  // a system on its own, or the lanes broke down: the scalar kernel
-        for (std::ptrdiff_t i = 0; i < n; ++i)
-          if (!is_finite(d[i])) throw InvalidArgument("rhs", s, i, "is not finite");
-        scratch.real_work.resize(n);
-        diffusion_thomas(n, b, d, out, scratch.real_work.data());
-        for (std::ptrdiff_t i = 0; i < n; ++i)
-          if (!is_finite(out[i]))
-            throw NumericalError(s, i, "the solution overflowed: rhs is too large for this type");
-        continue;
-      }
-      // Other methods, and periodic systems: expand to three diagonals.
-      scratch.slab.resize(3 * n);
-      T* a = scratch.slab.data();
-      T* diag = a + n;
-      T* c = diag + n;
-      expand_diffusion(b, n, options.periodic, a, diag, c);
-      const SystemView<T> view{{a, 1}, {diag, 1},       {c, 1}, {rhs + o, layout.row_stride},
-                               n,      options.periodic};
-      solve_one(view, Strided<T>{x + o, layout.row_stride}, fast, options.periodic,
-                options.hybrid_pcr_below, scratch.work, s);
+      status.run(s, [&] {
+        require_valid_beta(b, n, options.periodic, s);
+        if (lanes) {  // a system on its own, or the lanes broke down: the scalar kernel
+          solve_diffusion_one(b, d, out, n, scratch, s);
+          return;
+        }
+        // Other methods, and periodic systems: expand to three diagonals.
+        scratch.slab.resize(3 * n);
+        T* a = scratch.slab.data();
+        T* diag = a + n;
+        T* c = diag + n;
+        expand_diffusion(b, n, options.periodic, a, diag, c);
+        const SystemView<T> view{{a, 1}, {diag, 1}, {c, 1}, d, n, options.periodic};
+        solve_one(view, out, fast, options.periodic, options.hybrid_pcr_below, scratch.work, s);
+      });
     }
   };
   for_each_chunk<T>(layout, lanes ? W : 1, threads, solve_chunk);
-  return {fast, 0};
+  const std::ptrdiff_t failed = status.finish();
+  return {fast, 0, 1, failed};
 }
 
 }  // namespace tridiff

@@ -4,8 +4,12 @@
 #pragma once
 
 #include <algorithm>
+#include <climits>
+#include <cmath>
+#include <complex>
 #include <cstddef>
 #include <string>
+#include <type_traits>
 
 #include "tridiff/solvers/detail/scalar.hpp"
 #include "tridiff/solvers/error.hpp"
@@ -168,6 +172,122 @@ template <class T>
 std::ptrdiff_t first_non_dominant_row(const SystemView<T>& s) {
   const Dominance d = dominance(s, 0, s.n);
   return d.holds() ? -1 : d.first_row_failure;
+}
+
+// More precision and range than T, for the backward-error check.
+template <class T>
+struct wider {
+  using type = long double;
+};
+template <>
+struct wider<float> {
+  using type = double;
+};
+template <class R>
+struct wider<std::complex<R>> {
+  using type = std::complex<typename wider<R>::type>;
+};
+
+struct BackwardError {
+  long double value;   // ||d - A x|| / (||A|| ||x|| + ||d||), infinity norms (Rigal and Gaches)
+  std::ptrdiff_t row;  // the row of the largest residual
+};
+
+// backward_error computed in the scalar type W.
+template <class W, class T>
+BackwardError backward_error_in(const SystemView<T>& s, Strided<const T> x) {
+  using WR = real_t<W>;
+  const std::ptrdiff_t n = s.n;
+  WR worst = 0, norm_a = 0, norm_x = 0, norm_d = 0;
+  std::ptrdiff_t worst_row = 0;
+  for (std::ptrdiff_t i = 0; i < n; ++i) {
+    const std::ptrdiff_t before = i > 0 ? i - 1 : n - 1, after = i + 1 < n ? i + 1 : 0;
+    W product = W(s.b[i]) * W(x[i]);
+    WR row_norm = magnitude(W(s.b[i]));
+    if (i > 0 || s.periodic) {
+      product += W(s.a[i]) * W(x[before]);
+      row_norm += magnitude(W(s.a[i]));
+    }
+    if (i + 1 < n || s.periodic) {
+      product += W(s.c[i]) * W(x[after]);
+      row_norm += magnitude(W(s.c[i]));
+    }
+    const WR residual = magnitude(W(s.d[i]) - product);
+    if (residual > worst) {
+      worst = residual;
+      worst_row = i;
+    }
+    norm_a = std::max(norm_a, row_norm);
+    norm_x = std::max(norm_x, magnitude(W(x[i])));
+    norm_d = std::max(norm_d, magnitude(W(s.d[i])));
+  }
+  const WR denominator = norm_a * norm_x + norm_d;
+  return {static_cast<long double>(denominator > 0 ? worst / denominator : worst), worst_row};
+}
+
+// The normwise backward error of x as a solution of s: the smallest relative perturbation of
+// A and d that x solves exactly. One pass over the system. Float systems are measured in
+// double. Double ones in double too (x87 long double made the check cost as much as the
+// hybrid's solve): rounding moves the measured value by at most ~4u, against bounds of 32u
+// and more; only where a product overflowed (entries near max()) is it measured again in
+// long double.
+template <class T>
+BackwardError backward_error(const SystemView<T>& s, Strided<const T> x) {
+  if constexpr (std::is_same_v<real_t<T>, float>) {
+    return backward_error_in<typename wider<T>::type>(s, x);
+  } else {
+    const BackwardError fast = backward_error_in<T>(s, x);
+    if (std::isfinite(fast.value)) return fast;
+    return backward_error_in<typename wider<T>::type>(s, x);
+  }
+}
+
+// The exponent e of the largest entry of d (2^e <= max |d_i| < 2^(e+1), real and imaginary
+// parts apart), or INT_MIN if d is zero.
+template <class T>
+int largest_exponent(Strided<const T> d, std::ptrdiff_t n) {
+  real_t<T> largest = 0;
+  for (std::ptrdiff_t i = 0; i < n; ++i) {
+    if constexpr (is_complex_v<T>)
+      largest = std::max({largest, std::abs(d[i].real()), std::abs(d[i].imag())});
+    else
+      largest = std::max(largest, std::abs(d[i]));
+  }
+  return largest > 0 ? std::ilogb(largest) : INT_MIN;
+}
+
+// Runs kernel(rhs, result) -> the row of a breakdown or -1. If it succeeded with a non-finite
+// result although rhs is finite and large, an intermediate sum overflowed, not x (the forward
+// sweep's d[i] - a[i] x[i-1] with rhs near max(), where x itself is representable): it runs
+// again on rhs scaled down by a power of two (exactly, into `scaled`, n scalars) and scales
+// the result back, which is inf only where x itself overflows.
+template <class T, class Kernel>
+std::ptrdiff_t solve_rescaling_on_overflow(std::ptrdiff_t n, Strided<const T> d, T* result,
+                                           T* scaled, Kernel&& kernel) {
+  using R = real_t<T>;
+  const std::ptrdiff_t bad = kernel(d, result);
+  if (bad >= 0 || std::all_of(result, result + n, [](const T& v) { return is_finite(v); }))
+    return bad;
+  const int exponent = largest_exponent(d, n);
+  if (exponent <= 0) return bad;  // rhs is not large: scaling it cannot help
+  // Two normal factors: 2^-exponent alone is subnormal for the largest exponents.
+  const R down_half = std::ldexp(R(1), -(exponent / 2));
+  const R down_rest = std::ldexp(R(1), exponent / 2 - exponent);
+  for (std::ptrdiff_t i = 0; i < n; ++i) scaled[i] = d[i] * down_half * down_rest;
+  const std::ptrdiff_t again = kernel(Strided<const T>{scaled, 1}, result);
+  for (std::ptrdiff_t i = 0; i < n; ++i) result[i] *= std::ldexp(R(1), exponent);
+  return again;
+}
+
+// Throws NumericalError naming the first non-finite entry of a solution from finite inputs.
+template <class T>
+void require_finite_solution(const T* result, std::ptrdiff_t n, std::ptrdiff_t system,
+                             const char* method) {
+  for (std::ptrdiff_t i = 0; i < n; ++i)
+    if (!is_finite(result[i]))
+      throw NumericalError(system, i,
+                           std::string("the solution overflowed in ") + method +
+                               " (first at this row): the matrix is singular or badly scaled");
 }
 
 // Called after a kernel reported a breakdown at `row` (or -1 for a non-finite result):

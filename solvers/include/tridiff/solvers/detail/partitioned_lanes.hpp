@@ -20,6 +20,7 @@
 
 #include "tridiff/solvers/detail/checks.hpp"
 #include "tridiff/solvers/detail/scalar.hpp"
+#include "tridiff/solvers/detail/subnormals.hpp"
 #include "tridiff/solvers/detail/thomas.hpp"
 #include "tridiff/solvers/detail/transpose.hpp"
 #include "tridiff/solvers/detail/workspace.hpp"
@@ -366,8 +367,10 @@ bool partitioned_lanes(const SystemView<T>& s, Strided<T> x, int threads) {
   const bool streaming = direct && s.n * std::ptrdiff_t(sizeof(T)) >= kStreamingBytes;
   const int team = static_cast<int>(std::min<std::ptrdiff_t>(threads, layout.groups));
   bool reduced_ok = true, finished_ok = true;
+  const SubnormalsKept gradual_underflow;  // for the serial steps; see subnormals.hpp
 #pragma omp parallel num_threads(team) if (team > 1)
   {
+    const SubnormalsKept team_gradual_underflow;  // each thread has its own MXCSR
     static thread_local AlignedBuffer<T> local;
     local.resize(part_group_workspace<T, W>(layout));
     T* work = local.data();

@@ -34,4 +34,30 @@ class SubnormalsAsZero {
   SubnormalsAsZero& operator=(const SubnormalsAsZero&) = delete;
 };
 
+// The opposite, for the solvers: gradual underflow in one thread for as long as the guard
+// lives, whatever the caller chose (-ffast-math sets FTZ and DAZ at program start). A general
+// solver cannot flush: with beta = 1e38 in float the first pivot's inverse, 1/(1 + beta), is
+// the subnormal 1e-38, and flushed to zero it makes x = 0 without any sign of failure. Where
+// the caller's state already keeps subnormals, nothing is written.
+class SubnormalsKept {
+ public:
+#if defined(__SSE__) || defined(_M_X64)
+  SubnormalsKept() : saved_(_mm_getcsr()) {
+    if (saved_ & SubnormalsAsZero::kFlushBits) _mm_setcsr(saved_ & ~SubnormalsAsZero::kFlushBits);
+  }
+  ~SubnormalsKept() {
+    if (saved_ & SubnormalsAsZero::kFlushBits) _mm_setcsr(saved_);
+  }
+
+ private:
+  unsigned saved_;
+#else
+  SubnormalsKept() = default;
+#endif
+
+ public:
+  SubnormalsKept(const SubnormalsKept&) = delete;
+  SubnormalsKept& operator=(const SubnormalsKept&) = delete;
+};
+
 }  // namespace tridiff::detail
