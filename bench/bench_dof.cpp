@@ -37,7 +37,8 @@
 //                     from results/truth/ (tools/truth_cache.hpp) or rendered there once (about
 //                     25 s and 60 s on 2 cores); like the scatter errors, reported on every size.
 //                     TRIDIFF_BENCH_TRUTH_SAMPLES sets the rays per pixel (the quick notebook
-//                     run uses 64: 8x faster, its noise ~9 dB higher, still above every method)
+//                     run uses 72, which must be twice a perfect square: 7x faster, its noise
+//                     ~8.5 dB higher, still above every method)
 // Cost guard: a method x scene x size whose one run is estimated to take more than
 // kMaxRunSeconds is skipped (an error row saying so): the estimate is the 1024^2 run's time if
 // it has been measured, else a 256^2 (if close to the limit, 512^2) probe's, times the pixel
