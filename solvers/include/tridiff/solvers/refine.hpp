@@ -22,6 +22,24 @@ namespace detail {
 // The scalar a residual is accumulated in: one step wider than the data (detail::wider of
 // checks.hpp; ?gtrfs computes it in the working precision, a wider one makes the refined
 // answer accurate to the last bits).
+// The argument checks refine and solve_mixed share: the layout (one batch dimension, matching
+// the factors), the five arrays, and x apart from rhs unless `may_alias` (in place).
+template <class F, class T>
+void require_refine_arguments(const TridiagonalFactors<F>& factors, const T* sub, const T* diag,
+                              const T* super, const T* rhs, const T* x, const BatchLayout& layout,
+                              bool may_alias) {
+  validate_layout(layout);
+  require_one_batch_dimension(layout, "refinement");
+  require_matching(factors, layout);
+  for (const auto& [p, name] : {std::pair<const T*, const char*>{sub, "sub"},
+                                {diag, "diag"},
+                                {super, "super"},
+                                {rhs, "rhs"},
+                                {x, "x"}})
+    require_pointer(p, name);
+  require_disjoint(rhs, "rhs", x, layout, may_alias);
+}
+
 template <class T>
 using wider_t = typename wider<T>::type;
 
@@ -298,16 +316,7 @@ RefineReport<real_t<T>> refine(const T* sub, const T* diag, const T* super,
   using namespace detail;
   using R = real_t<T>;
   constexpr int W = kLanes<T>;
-  validate_layout(layout);
-  detail::require_one_batch_dimension(layout, "refinement");
-  require_matching(factors, layout);
-  for (const auto& [p, name] : {std::pair<const T*, const char*>{sub, "sub"},
-                                {diag, "diag"},
-                                {super, "super"},
-                                {rhs, "rhs"},
-                                {x, "x"}})
-    require_pointer(p, name);
-  require_disjoint(rhs, "rhs", x, layout, false);
+  require_refine_arguments(factors, sub, diag, super, rhs, x, layout, false);
   const std::ptrdiff_t stride =
       rhs_stride_of({options.apply, options.nrhs, options.rhs_stride, 0}, layout);
   const std::ptrdiff_t n = layout.n, nrhs = options.nrhs;
@@ -398,16 +407,7 @@ MixedReport solve_mixed(const TridiagonalFactors<F>& factors, const T* sub, cons
                     is_complex_v<F> == is_complex_v<T>,
                 "solve_mixed refines double data with float factors");
   constexpr int W = kLanes<F>;
-  validate_layout(layout);
-  detail::require_one_batch_dimension(layout, "refinement");
-  require_matching(factors, layout);
-  for (const auto& [p, name] : {std::pair<const T*, const char*>{sub, "sub"},
-                                {diag, "diag"},
-                                {super, "super"},
-                                {rhs, "rhs"},
-                                {x, "x"}})
-    require_pointer(p, name);
-  require_disjoint(rhs, "rhs", x, layout, true);
+  require_refine_arguments(factors, sub, diag, super, rhs, x, layout, true);
   const std::ptrdiff_t n = layout.n;
   const R target = R(options.target_epsilons) * std::numeric_limits<R>::epsilon();
   MixedReport report;
