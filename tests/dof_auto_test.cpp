@@ -38,28 +38,33 @@ Image far_half_coc() {
 }
 
 TEST(DofAuto, TableRoundTripsThroughCsv) {
-  const std::vector<MethodTableRow> rows = {
+  std::vector<MethodTableRow> rows = {
       row("adi", "a", false, 4, 0.5, 0.01, 31.5),
       row("scatter", "a", true, 16, 1, 2.5, std::numeric_limits<double>::infinity())};
+  rows[0].reference = "truth";
   const std::vector<MethodTableRow> back = parse_method_table(format_method_table(rows));
   ASSERT_EQ(back.size(), 2u);
   EXPECT_EQ(back[0].method, "adi");
   EXPECT_EQ(back[0].max_radius, 4.f);
   EXPECT_FALSE(back[0].has_near);
   EXPECT_DOUBLE_EQ(back[0].psnr, 31.5);
+  EXPECT_EQ(back[0].reference, "truth");
+  EXPECT_EQ(back[1].reference, "scatter");
   EXPECT_TRUE(back[1].has_near);
   EXPECT_TRUE(std::isinf(back[1].psnr));
 }
 
 TEST(DofAuto, MalformedTableNamesTheLine) {
   const std::string header =
-      "method,scene,width,height,threads,max_radius,has_near,work_fraction,seconds,psnr,ssim\n";
+      "method,scene,width,height,threads,max_radius,has_near,work_fraction,seconds,psnr,ssim,"
+      "reference\n";
   for (const auto& [csv, line] : std::vector<std::pair<std::string, std::ptrdiff_t>>{
            {"method,scene\n", 1},
            {"# comment\n" + header + "adi,a,100,100,2,4,0,0.5,0.01,31\n", 3},
-           {header + "adi,a,100,100,2,4,2,0.5,0.01,31,0.9\n", 2},
-           {header + "adi,a,100,100,2,4,0,0.5,fast,31,0.9\n", 2},
-           {header + "adi,a,100,100,2,4,0,1.5,0.01,31,0.9\n", 2},
+           {header + "adi,a,100,100,2,4,2,0.5,0.01,31,0.9,truth\n", 2},
+           {header + "adi,a,100,100,2,4,0,0.5,fast,31,0.9,truth\n", 2},
+           {header + "adi,a,100,100,2,4,0,1.5,0.01,31,0.9,truth\n", 2},
+           {header + "adi,a,100,100,2,4,0,0.5,0.01,31,0.9,dense\n", 2},
            {"", 1}}) {
     try {
       parse_method_table(csv);

@@ -1,8 +1,15 @@
 // Measures every registered depth-of-field method on every built-in scene — time (best of a few
-// runs) and error against the scatter reference — and writes the table that `--method auto`
-// chooses from (auto.hpp; dof/data/method_table.csv). Run through scripts/dof_method_table.sh.
+// runs) and error against the scene's best reference — and writes the table that `--method
+// auto` chooses from (auto.hpp; dof/data/method_table.csv). Run through
+// scripts/dof_method_table.sh.
 //
 //   tridiff_dof_method_table [--size N] [--threads T] [--output FILE] [--method NAME]...
+//
+// The reference: for the ray-traced scenes (procedural, lamps), their thin-lens truth at
+// kTruthSamples rays per pixel (truth.hpp), read from results/truth/ or rendered there once
+// (tools/truth_cache.hpp; about a minute per scene at 1024^2 on 2 cores), scored as
+// score_against_truth() does (sRGB); for the synthetic scenes, which have no lens to trace,
+// the `scatter` method, scored by dof_error().
 //
 // Defaults: 1024 x 1024 (large enough that a frame no longer fits in the caches, as real ones
 // do not), 2 threads, stdout. --method (repeatable) measures only the methods named and
@@ -26,10 +33,42 @@
 #include "tridiff/dof/quality.hpp"
 #include "tridiff/dof/scenes.hpp"
 #include "tridiff/dof/tiles.hpp"
+#include "truth_cache.hpp"
 
 namespace {
 
 using namespace tridiff;
+
+// 512 rays per pixel: the truth's own noise is ~48 dB (procedural) and ~44 dB (lamps), about
+// 10 dB below every method's error against it (bench_dof.cpp measures the same).
+constexpr int kTruthSamples = 512;
+
+bool is_ray_traced(std::string_view scene) {
+  const auto names = ray_traced_scene_names();
+  return std::find(names.begin(), names.end(), scene) != names.end();
+}
+
+// The scene's reference image and how it is scored: its thin-lens truth, else `scatter`.
+struct Reference {
+  Image image;
+  bool truth = false;
+};
+
+Reference make_reference(const DofScene& scene, const DofOptions& settings) {
+  Reference reference;
+  reference.truth = is_ray_traced(scene.name);
+  if (reference.truth) {
+    reference.image =
+        tools::cached_lens_truth("results/truth", scene.name, scene.color.width(),
+                                 scene.color.height(), kTruthSamples, {}, settings.threads)
+            .color;
+  } else {
+    DofReport report;
+    report = depth_of_field(reference.image, scene.color, scene.coc.plane(0),
+                            find_dof_method("scatter"), settings);
+  }
+  return reference;
+}
 
 double run_seconds(const DofMethod& method, const DofScene& scene, const DofOptions& settings,
                    Image& out) {
@@ -137,10 +176,7 @@ int measure(int argc, char** argv) {
     const DofScene scene = make_dof_scene(info.name, size, size, threads);
     const TileMap tiles(scene.coc.plane(0), settings.in_focus_coc_px, TileMap::kDefaultTile, 0,
                         threads);
-    Image reference;
-    DofReport report;
-    report = depth_of_field(reference, scene.color, scene.coc.plane(0), find_dof_method("scatter"),
-                            settings);
+    const Reference reference = make_reference(scene, settings);
     for (const DofMethod& method : dof_methods()) {
       if (!measured_here(method.name)) continue;
       Image out;
@@ -153,12 +189,21 @@ int measure(int argc, char** argv) {
       row.has_near = tiles.has_near();
       row.work_fraction = tiles.work_fraction();
       row.seconds = run_seconds(method, scene, settings, out);
-      const DofError error =
-          dof_error(out, reference, scene.color, scene.coc.plane(0), settings.in_focus_coc_px);
-      row.psnr = error.psnr;
-      row.ssim = error.ssim;
-      std::fprintf(stderr, "%-16s %-14s %9.2f ms  PSNR %6.2f dB  SSIM %.4f\n", row.method.c_str(),
-                   row.scene.c_str(), row.seconds * 1e3, row.psnr, row.ssim);
+      if (reference.truth) {
+        const TruthScore score = score_against_truth(out, reference.image, scene.coc.plane(0));
+        row.psnr = score.psnr;
+        row.ssim = score.ssim;
+        row.reference = "truth";
+      } else {
+        const DofError error = dof_error(out, reference.image, scene.color, scene.coc.plane(0),
+                                         settings.in_focus_coc_px);
+        row.psnr = error.psnr;
+        row.ssim = error.ssim;
+        row.reference = "scatter";
+      }
+      std::fprintf(stderr, "%-16s %-14s %9.2f ms  PSNR %6.2f dB  SSIM %.4f  vs %s\n",
+                   row.method.c_str(), row.scene.c_str(), row.seconds * 1e3, row.psnr, row.ssim,
+                   row.reference.c_str());
       rows.push_back(row);
     }
   }

@@ -37,7 +37,8 @@ constexpr const char* kDofUsage = R"(method
   --method NAME             bokeh (default: adi for the body, out-of-focus highlights as
                             aperture-shaped sprites); every method: `tridiff methods`; `auto`
                             picks the cheapest whose measured error meets --psnr-budget
-  --psnr-budget DB          auto: the least PSNR against the scatter reference (default 30)
+  --psnr-budget DB          auto: the least PSNR against the table's references: the thin-lens
+                            truth of the ray-traced scenes, scatter on the others (default 30)
   --layers                  blur the near field as its own layer, so that it spreads over what
                             lies behind it (default for the methods that have layers; a method
                             without them refuses --layers)

@@ -20,7 +20,8 @@ extern const char* const kBuiltinMethodTable;  // method_table.cpp, generated fr
 namespace {
 
 constexpr std::string_view kHeader =
-    "method,scene,width,height,threads,max_radius,has_near,work_fraction,seconds,psnr,ssim";
+    "method,scene,width,height,threads,max_radius,has_near,work_fraction,seconds,psnr,ssim,"
+    "reference";
 
 std::vector<std::string_view> split(std::string_view line, char separator) {
   std::vector<std::string_view> fields;
@@ -70,8 +71,8 @@ std::vector<MethodTableRow> parse_method_table(std::string_view csv) {
       continue;
     }
     const std::vector<std::string_view> f = split(line, ',');
-    if (f.size() != 11)
-      bad_line(line_number, "has " + std::to_string(f.size()) + " columns, expected 11");
+    if (f.size() != 12)
+      bad_line(line_number, "has " + std::to_string(f.size()) + " columns, expected 12");
     MethodTableRow row;
     row.method = std::string(f[0]);
     row.scene = std::string(f[1]);
@@ -85,6 +86,9 @@ std::vector<MethodTableRow> parse_method_table(std::string_view csv) {
     row.seconds = number(f[8], line_number, "seconds");
     row.psnr = number(f[9], line_number, "psnr");
     row.ssim = number(f[10], line_number, "ssim");
+    row.reference = std::string(f[11]);
+    if (row.reference != "truth" && row.reference != "scatter")
+      bad_line(line_number, "reference must be 'truth' or 'scatter'");
     if (row.method.empty() || row.width < 1 || row.height < 1 || row.seconds < 0 ||
         row.work_fraction < 0 || row.work_fraction > 1)
       bad_line(line_number, "empty method, size below 1, negative time or work outside [0, 1]");
@@ -101,7 +105,7 @@ std::string format_method_table(std::span<const MethodTableRow> rows) {
            std::to_string(r.height) + "," + std::to_string(r.threads) + "," +
            format_number(r.max_radius) + "," + (r.has_near ? "1" : "0") + "," +
            format_number(r.work_fraction) + "," + format_number(r.seconds) + "," +
-           format_number(r.psnr) + "," + format_number(r.ssim) + "\n";
+           format_number(r.psnr) + "," + format_number(r.ssim) + "," + r.reference + "\n";
   return csv;
 }
 
@@ -156,8 +160,8 @@ std::string describe(const Candidate& c) {
   std::ostringstream out;
   out.precision(3);
   out << c.method->name << " (" << c.predicted_seconds * 1e3 << " ms from its '"
-      << c.cost_row->scene << "' row, PSNR " << c.expected_psnr << " dB from '"
-      << c.error_row->scene << "')";
+      << c.cost_row->scene << "' row, PSNR " << c.expected_psnr << " dB against "
+      << c.error_row->reference << " on '" << c.error_row->scene << "')";
   return out.str();
 }
 

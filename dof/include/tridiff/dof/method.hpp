@@ -23,7 +23,8 @@ struct DofOptions {
   bool skip_in_focus = true;      // false: every pixel takes the full path (the reference)
   bool layers = false;            // blur the near field as its own layer (Kass et al. 2006)
   float in_focus_coc_px = 1.f;    // |CoC| below this (a sub-pixel blur) counts as sharp
-  double error_budget_psnr = 30;  // `auto`: the least PSNR (dB) against scatter to accept
+  double error_budget_psnr = 30;  // `auto`: the least PSNR (dB) to accept (auto.hpp: against
+                                  // the thin-lens truth, or scatter where a scene has none)
   // Lens character, for the methods that shape their bokeh (DofMethod::shapes_bokeh; the others
   // refuse a shape other than the circle, or a kernel image, rather than ignore it).
   ApertureShape aperture;
