@@ -684,6 +684,67 @@ TYPED_TEST(SolverErrors, AutoSolvesNonDominantMatrix) {
   }
 }
 
+// Dominance is judged per system inside full chunks of lanes too (image rows: the check runs
+// inside the rows kernel's forward sweep). Among 2 chunks and a tail of rows of 70 unknowns
+// (blocks of 32 columns), system 5 is dominant by columns only (row 40 is not), which Thomas
+// accepts, and system kLanes + 3 is dominant neither way at row 33: Thomas refuses that one
+// alone, leaving its rhs as it was in place and solving every other system; Auto pivots it.
+TYPED_TEST(SolverErrors, DominanceIsJudgedPerSystemInFullChunksOfRows) {
+  using T = TypeParam;
+  constexpr std::ptrdiff_t n = 70, lanes = detail::kLanes<T>;
+  const std::ptrdiff_t count = 2 * lanes + 3, by_columns = 5, refused = lanes + 3;
+  auto batch = valid_batch<T>(n, count);
+  for (std::ptrdiff_t i = 0; i < n; ++i) {  // [1 4 1] rows, then row 40 made 3 4 3
+    batch.at(batch.a, by_columns, i) = T(i > 0 ? 1 : 0);
+    batch.at(batch.b, by_columns, i) = T(4);
+    batch.at(batch.c, by_columns, i) = T(i + 1 < n ? 1 : 0);
+  }
+  batch.at(batch.a, by_columns, 40) = T(3);  // row 40: 3 + 3 > 4 ...
+  batch.at(batch.c, by_columns, 40) = T(3);
+  batch.at(batch.c, by_columns, 38) = T(0.5);  // ... column 39: 0.5 + 3 <= 4
+  batch.at(batch.a, by_columns, 42) = T(0.5);  // ... column 41: 3 + 0.5 <= 4
+  batch.at(batch.a, refused, 33) = T(1);
+  batch.at(batch.c, refused, 33) = T(1);
+  batch.at(batch.b, refused, 33) = T(0.125);
+  batch.at(batch.c, refused, 32) = T(1);  // column 33: 1 + 1 > 0.125
+  batch.at(batch.a, refused, 34) = T(1);
+  const long double bound = 16 * unit_roundoff<T>();
+  auto expect_solved = [&](const std::vector<T>& x, std::ptrdiff_t s) {
+    std::vector<T> xs;
+    for (std::ptrdiff_t i = 0; i < n; ++i) xs.push_back(x[batch.layout.offset(s, i)]);
+    EXPECT_LE(backward_error(system_of(batch, s), xs), bound) << "system " << s;
+  };
+  for (int threads : {1, 2}) {
+    SCOPED_TRACE(::testing::Message() << threads << " threads");
+    std::vector<T> rhs = batch.d;
+    try {
+      solve_in_place(batch.a.data(), batch.b.data(), batch.c.data(), rhs.data(), batch.layout,
+                     with(Method::Thomas, threads));
+      ADD_FAILURE() << "Thomas accepted system " << refused;
+    } catch (const NumericalError& e) {
+      EXPECT_EQ(e.system(), refused) << e.what();
+      EXPECT_EQ(e.row(), 33) << e.what();
+      EXPECT_EQ(e.failed_count(), 1) << e.what();
+    }
+    for (std::ptrdiff_t s = 0; s < count; ++s) {
+      if (s != refused) {
+        expect_solved(rhs, s);
+        continue;
+      }
+      for (std::ptrdiff_t i = 0; i < n; ++i) {
+        const auto o = batch.layout.offset(s, i);
+        EXPECT_EQ(std::memcmp(&rhs[o], &batch.d[o], sizeof(T)), 0) << "rhs row " << i;
+      }
+    }
+    SolveReport report;
+    std::vector<T> x(batch.d.size());
+    ASSERT_NO_THROW(report = solve(batch.a.data(), batch.b.data(), batch.c.data(), batch.d.data(),
+                                   x.data(), batch.layout, with(Method::Auto, threads)));
+    EXPECT_EQ(report.pivoted_systems, 1);
+    for (std::ptrdiff_t s = 0; s < count; ++s) expect_solved(x, s);
+  }
+}
+
 // A dominant system whose solution exceeds the range of the type (diag ~ 1/sqrt(max),
 // rhs ~ max/2, so x ~ max^1.5): NumericalError naming the system, never inf in x, out of
 // place and in place (where the rhs is finite on entry, so it must not be blamed).

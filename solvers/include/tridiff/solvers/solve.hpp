@@ -546,7 +546,8 @@ SolveReport solve_single(const SystemView<T>& view, Strided<T> x, Method method,
 
 // Thomas on a chunk of up to W systems, one SIMD lane each. Interleaved systems (image
 // columns) are solved where they lie; other layouts, partial chunks and in-place solves go
-// through a lane-contiguous slab, so that a failed in-place solve leaves rhs intact.
+// through a lane-contiguous slab, so that a failed in-place solve leaves rhs intact. (Full
+// chunks of image rows go to solve_rows instead.)
 // With `check`, the lanes are first checked for finite, dominant matrices. Returns false if
 // some lane failed the check or broke down: the caller then goes system by system.
 template <class T>
@@ -576,6 +577,26 @@ bool solve_lanes(const T* a, const T* b, const T* c, const T* d, T* x, const Bat
   if (!thomas_lanes<T, W>(n, sa, sb, sc, sd, sd, W, sw)) return false;
   scatter<T, W>(sd, layout, first, lanes, x);
   return true;
+}
+
+// Lanes per thomas_rows call: one 512-bit vector. The rows kernel reads its W rows of all four
+// arrays side by side, and 4 x W streams are what the prefetchers and DRAM pages serve well
+// only for small W; its per-lane state (nine values) also stays in registers.
+template <class T>
+inline constexpr int kRowLanes = static_cast<int>(64 / sizeof(T));
+
+// Thomas on kRowLanes contiguous systems (image rows) from `first`; false if a lane failed,
+// with x untouched.
+template <class T>
+bool solve_rows(const T* a, const T* b, const T* c, const T* d, T* x, const BatchLayout& layout,
+                std::ptrdiff_t first, bool check, Scratch<T>& scratch) {
+  constexpr int V = kRowLanes<T>;
+  const std::ptrdiff_t n = layout.n, o = layout.offset(first, 0);
+  scratch.work.resize(thomas_rows_workspace<T>(n, V));
+  return check ? thomas_rows<T, V, true>(n, a + o, b + o, c + o, d + o, x + o, layout.system_stride,
+                                         scratch.work.data())
+               : thomas_rows<T, V, false>(n, a + o, b + o, c + o, d + o, x + o,
+                                          layout.system_stride, scratch.work.data());
 }
 
 // The diffusion-form counterpart of solve_lanes.
@@ -701,13 +722,9 @@ SolveReport solve(const T* sub, const T* diag, const T* super, const T* rhs, T* 
     }
   }
 
-  auto solve_chunk = [&](std::ptrdiff_t first, std::ptrdiff_t systems, Scratch<T>& scratch) {
-    const SubnormalsKept gradual_underflow;  // see subnormals.hpp
-    if (lanes && fills_lanes<T>(systems) &&
-        solve_lanes(sub, diag, super, rhs, x, layout, first, systems, check, scratch))
-      return;
-    // A lane broke down (re-solve one by one so that each failure names its system and row
-    // and the others are solved), or this chunk needs per-system methods.
+  // Systems [first, first + systems) one by one: where a lane broke down (so that each failure
+  // names its system and row and the others are solved), or for the per-system methods.
+  auto solve_each = [&](std::ptrdiff_t first, std::ptrdiff_t systems, Scratch<T>& scratch) {
     std::ptrdiff_t local_pivoted = 0;
     for (std::ptrdiff_t l = 0; l < systems; ++l) {
       const std::ptrdiff_t s = first + l;
@@ -738,6 +755,18 @@ SolveReport solve(const T* sub, const T* diag, const T* super, const T* rhs, T* 
       std::lock_guard<std::mutex> lock(count_guard);
       pivoted += local_pivoted;
     }
+  };
+  auto solve_chunk = [&](std::ptrdiff_t first, std::ptrdiff_t systems, Scratch<T>& scratch) {
+    const SubnormalsKept gradual_underflow;                 // see subnormals.hpp
+    if (lanes && systems == W && layout.row_stride == 1) {  // image rows
+      for (std::ptrdiff_t part = first; part < first + W; part += kRowLanes<T>)
+        if (!solve_rows(sub, diag, super, rhs, x, layout, part, check, scratch))
+          solve_each(part, kRowLanes<T>, scratch);
+      return;
+    }
+    if (!lanes || !fills_lanes<T>(systems) ||
+        !solve_lanes(sub, diag, super, rhs, x, layout, first, systems, check, scratch))
+      solve_each(first, systems, scratch);
   };
   for_each_chunk<T>(layout, lanes ? W : 1, threads, solve_chunk);
   const std::ptrdiff_t failed = status.finish();

@@ -6,8 +6,10 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <limits>
 
 #include "tridiff/solvers/detail/scalar.hpp"
+#include "tridiff/solvers/detail/transpose.hpp"
 
 namespace tridiff::detail {
 
@@ -94,6 +96,122 @@ bool thomas_lanes(std::ptrdiff_t n, const T* a, const T* b, const T* c, const T*
   bool healthy = true;
   for (int l = 0; l < W; ++l) healthy = healthy && margin[l] > 0 && probe[l] == 0;
   return healthy;
+}
+
+// Scalars of workspace thomas_rows needs.
+template <class T>
+constexpr std::ptrdiff_t thomas_rows_workspace(std::ptrdiff_t n, int lanes) {
+  return 2 * n * lanes + 4 * kTransposeBlock * lanes;
+}
+
+// thomas_lanes on W contiguous systems (image rows: equation i of system l at l * pitch + i),
+// the rows transposed into lanes kTransposeBlock columns at a time (in L1) as the forward sweep
+// reaches them: a, b, c and d are read once, from memory, and x written once. Transposing whole
+// rows into a slab first (as for other layouts) moves every array through the caches twice more.
+// With Check, a lane must also be diagonally dominant by rows or by columns, the test of
+// lanes_finite_and_dominant fused into the forward sweep.
+// The solution stays in `work` until both sweeps found every lane healthy, so x may be d and a
+// failed call leaves x untouched. Returns false if some lane failed (the caller re-solves the
+// systems one by one).
+template <class T, int W, bool Check>
+bool thomas_rows(std::ptrdiff_t n, const T* a, const T* b, const T* c, const T* d, T* x,
+                 std::ptrdiff_t pitch, T* work) {
+  using R = real_t<T>;
+  constexpr std::ptrdiff_t kBlock = kTransposeBlock;
+  const R tolerance = kVanishingPivot * epsilon<T>;
+  const R slack = 1 - 4 * epsilon<T>;
+  T* multipliers = work;       // c'_i = c_i / pivot_i, lane-contiguous
+  T* solution = work + n * W;  // d'_i after the forward sweep, x_i after the backward one
+  T* block_a = solution + n * W;
+  T* block_b = block_a + kBlock * W;
+  T* block_c = block_b + kBlock * W;
+  T* block_d = block_c + kBlock * W;
+  const T *rows_a[W], *rows_b[W], *rows_c[W], *rows_d[W];
+  for (int l = 0; l < W; ++l) {
+    rows_a[l] = a + l * pitch;
+    rows_b[l] = b + l * pitch;
+    rows_c[l] = c + l * pitch;
+    rows_d[l] = d + l * pitch;
+  }
+  T previous_x[W], previous_w[W];
+  R margin[W];  // min over rows of |pivot| - tolerance * scale: must stay positive
+  R probe[W];   // sum of value * 0 over everything read and produced: NaN iff not all finite
+  // Dominance: row i is checked at row i; column i - 1 (|b_{i-1}| against |c_{i-2}| + |a_i|)
+  // also at row i, from the magnitudes carried over.
+  R row_failure[W], column_failure[W], diagonal_before[W], super_before[W], super_before2[W];
+  for (int l = 0; l < W; ++l) {
+    previous_x[l] = previous_w[l] = T(0);
+    margin[l] = std::numeric_limits<R>::max();
+    probe[l] = row_failure[l] = column_failure[l] = 0;
+    diagonal_before[l] = super_before[l] = super_before2[l] = 0;
+  }
+  for (std::ptrdiff_t begin = 0; begin < n; begin += kBlock) {
+    const std::ptrdiff_t columns = std::min(kBlock, n - begin);
+    gather_into_lanes<T, W>(rows_a, begin, columns, block_a, n);
+    gather_into_lanes<T, W>(rows_b, begin, columns, block_b, n);
+    gather_into_lanes<T, W>(rows_c, begin, columns, block_c, n);
+    gather_into_lanes<T, W>(rows_d, begin, columns, block_d, n);
+    for (std::ptrdiff_t k = 0; k < columns; ++k) {
+      const std::ptrdiff_t i = begin + k;
+      const bool first = i == 0, last = i == n - 1;  // a_0 and c_{n-1} are not part of it
+      T* w = multipliers + i * W;
+      T* y = solution + i * W;
+#pragma omp simd
+      for (int l = 0; l < W; ++l) {
+        // Loaded whatever the row, then selected: a load under a condition is control flow
+        // the vectoriser gives up on.
+        const T a_read = block_a[k * W + l], c_read = block_c[k * W + l];
+        const T ai = first ? T(0) : a_read;
+        const T bi = block_b[k * W + l];
+        const T ci = last ? T(0) : c_read;
+        const T eliminated = ai * previous_w[l];
+        const T pivot = bi - eliminated;
+        const R scale = magnitude(bi) + magnitude(eliminated);
+        margin[l] = std::min(margin[l], magnitude(pivot) - tolerance * scale);
+        const T inverse = T(1) / pivot;
+        const T yi = (block_d[k * W + l] - ai * previous_x[l]) * inverse;
+        const T wi = ci * inverse;
+        y[l] = yi;
+        w[l] = wi;
+        previous_x[l] = yi;
+        previous_w[l] = wi;
+        probe[l] += (scale + magnitude(yi) + magnitude(ci)) * 0;
+        if constexpr (Check) {
+          const R diagonal = magnitude(bi), sub = magnitude(ai), super = magnitude(ci);
+          row_failure[l] = std::max(row_failure[l], R(slack * diagonal < sub + super));
+          // Row 0 has no column before it: diagonal_before is 0 there and the test passes.
+          column_failure[l] =
+              std::max(column_failure[l], R(slack * diagonal_before[l] < super_before2[l] + sub));
+          super_before2[l] = super_before[l];
+          super_before[l] = super;
+          diagonal_before[l] = diagonal;
+        }
+      }
+    }
+  }
+  for (std::ptrdiff_t i = n - 2; i >= 0; --i) {
+    const T* w = multipliers + i * W;
+    T* y = solution + i * W;
+#pragma omp simd
+    for (int l = 0; l < W; ++l) {
+      y[l] -= w[l] * y[W + l];
+      probe[l] += magnitude(y[l]) * 0;
+    }
+  }
+  bool healthy = true;
+  for (int l = 0; l < W; ++l) {
+    if constexpr (Check)  // the last column: |b_{n-1}| against |c_{n-2}|
+      column_failure[l] =
+          std::max(column_failure[l], R(slack * diagonal_before[l] < super_before2[l]));
+    healthy = healthy && margin[l] > 0 && probe[l] == 0 &&
+              (!Check || row_failure[l] == 0 || column_failure[l] == 0);
+  }
+  if (!healthy) return false;
+  T* rows_x[W];
+  for (int l = 0; l < W; ++l) rows_x[l] = x + l * pitch;
+  for (std::ptrdiff_t begin = 0; begin < n; begin += kBlock)
+    scatter_from_lanes<T, W>(solution + begin * W, std::min(kBlock, n - begin), rows_x, begin);
+  return true;
 }
 
 }  // namespace tridiff::detail

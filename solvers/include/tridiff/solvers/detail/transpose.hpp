@@ -54,6 +54,32 @@ inline constexpr std::ptrdiff_t kTransposeBlock = 32;
   }
 }
 
+// The same for 8 rows of 8 doubles: interleave pairs of rows, then pairs of pairs (two-source
+// permutes), then 256-bit halves.
+[[gnu::always_inline]] inline void transpose_8x8(__m512d r[8]) {
+  const __m512i low_pairs = _mm512_setr_epi64(0, 1, 8, 9, 4, 5, 12, 13);
+  const __m512i high_pairs = _mm512_setr_epi64(2, 3, 10, 11, 6, 7, 14, 15);
+  __m512d t[8], u[8];
+  for (int k = 0; k < 4; ++k) {
+    t[2 * k] = _mm512_unpacklo_pd(r[2 * k], r[2 * k + 1]);      // columns 0, 2, 4, 6
+    t[2 * k + 1] = _mm512_unpackhi_pd(r[2 * k], r[2 * k + 1]);  // columns 1, 3, 5, 7
+  }
+  for (int h = 0; h < 2; ++h) {  // u[4h + j]: column j, then column j + 4, of rows 4h..4h+3
+    u[4 * h] = _mm512_permutex2var_pd(t[4 * h], low_pairs, t[4 * h + 2]);
+    u[4 * h + 1] = _mm512_permutex2var_pd(t[4 * h + 1], low_pairs, t[4 * h + 3]);
+    u[4 * h + 2] = _mm512_permutex2var_pd(t[4 * h], high_pairs, t[4 * h + 2]);
+    u[4 * h + 3] = _mm512_permutex2var_pd(t[4 * h + 1], high_pairs, t[4 * h + 3]);
+  }
+  for (int j = 0; j < 4; ++j) {
+    r[j] = _mm512_shuffle_f64x2(u[j], u[4 + j], 0x44);
+    r[4 + j] = _mm512_shuffle_f64x2(u[j], u[4 + j], 0xEE);
+  }
+}
+
+inline __mmask8 first_columns8(std::ptrdiff_t columns) {
+  return columns >= 8 ? __mmask8(0xFF) : __mmask8((1u << columns) - 1);
+}
+
 inline __mmask16 first_columns(std::ptrdiff_t columns) {
   return columns >= 16 ? __mmask16(0xFFFF) : __mmask16((1u << columns) - 1);
 }
@@ -96,9 +122,25 @@ inline void gather_into_lanes(const T* const* rows, std::ptrdiff_t x, std::ptrdi
   if (readable < 0) readable = x + columns;
   for (std::ptrdiff_t k = 0; k < columns; k += 16) {
     const std::ptrdiff_t width = std::min<std::ptrdiff_t>(16, columns - k);
-    if (x + k + kAhead < readable)
-      for (int l = 0; l < W; ++l) __builtin_prefetch(rows[l] + x + k + kAhead);
+    if (x + k + kAhead < readable)  // every cache line of the next 16 columns
+      for (int l = 0; l < W; ++l)
+        for (std::ptrdiff_t line = 0; line < 16; line += 64 / std::ptrdiff_t(sizeof(T)))
+          __builtin_prefetch(rows[l] + x + k + kAhead + line);
 #if defined(__AVX512F__)
+    if constexpr (std::is_same_v<T, double> && W % 8 == 0) {
+      for (std::ptrdiff_t half = 0; half < width; half += 8) {
+        const __mmask8 mask = first_columns8(width - half);
+        for (int group = 0; group < W; group += 8) {
+          __m512d r[8];
+          for (int j = 0; j < 8; ++j)
+            r[j] = _mm512_maskz_loadu_pd(mask, rows[group + j] + x + k + half);
+          transpose_8x8(r);
+          for (std::ptrdiff_t j = 0; j < std::min<std::ptrdiff_t>(8, width - half); ++j)
+            _mm512_storeu_pd(block + (k + half + j) * W + group, r[j]);
+        }
+      }
+      continue;
+    }
     if constexpr (std::is_same_v<T, float> && W % 16 == 0) {
       const __mmask16 mask = first_columns(width);
       for (int group = 0; group < W; group += 16) {
@@ -126,6 +168,27 @@ inline void scatter_from_lanes(const T* block, std::ptrdiff_t columns, T* const*
   for (std::ptrdiff_t k = 0; k < columns; k += 16) {
     const std::ptrdiff_t width = std::min<std::ptrdiff_t>(16, columns - k);
 #if defined(__AVX512F__)
+    if constexpr (std::is_same_v<T, double> && W % 8 == 0) {
+      for (std::ptrdiff_t half = 0; half < width; half += 8) {
+        const std::ptrdiff_t count = std::min<std::ptrdiff_t>(8, width - half);
+        const __mmask8 mask = first_columns8(count);
+        for (int group = 0; group < W; group += 8) {
+          __m512d r[8];
+          for (int j = 0; j < 8; ++j)
+            r[j] = j < count ? _mm512_loadu_pd(block + (k + half + j) * W + group)
+                             : _mm512_setzero_pd();
+          transpose_8x8(r);
+          for (int j = 0; j < 8; ++j) {
+            double* to = rows[group + j] + x + k + half;
+            if (streaming && count == 8 && (reinterpret_cast<std::uintptr_t>(to) & 63) == 0)
+              _mm512_stream_pd(to, r[j]);
+            else
+              _mm512_mask_storeu_pd(to, mask, r[j]);
+          }
+        }
+      }
+      continue;
+    }
     if constexpr (std::is_same_v<T, float> && W % 16 == 0) {
       const __mmask16 mask = first_columns(width);
       for (int group = 0; group < W; group += 16) {
