@@ -30,9 +30,16 @@ python=/usr/bin/python3  # Debian's: the notebooks' packages are installed for i
 start=$SECONDS
 
 bash scripts/deps.sh notebooks
-cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release -DPython_EXECUTABLE="$python" >/dev/null
 cmake --build "$build" -j"${TRIDIFF_JOBS:-$(nproc)}" --target tridiff tridiff_bench_blur \
-  tridiff_bench_solvers tridiff_bench_dof tridiff_stability_table tridiff_blur_effective_sigma
+  tridiff_bench_solvers tridiff_bench_dof tridiff_stability_table tridiff_blur_effective_sigma \
+  tridiff_python
+# notebooks/heat_equation.ipynb imports the Python module from the build folder.
+case "$build" in
+  /*) module_dir="$build/python" ;;
+  *) module_dir="$PWD/$build/python" ;;
+esac
+export PYTHONPATH="$module_dir${PYTHONPATH:+:$PYTHONPATH}"
 
 if ((full)); then
   results=results
