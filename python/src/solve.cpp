@@ -5,7 +5,9 @@
 #include <pybind11/pybind11.h>
 
 #include <complex>
+#include <cstdint>
 #include <exception>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -96,10 +98,34 @@ const T* data_of(const py::array& array) {
   return static_cast<const T*>(array.data());
 }
 
-// Runs solver(offset, layout) for every call of the plan with the GIL released; a tridiff
+// The status array of `info=True`: one int64 per system, the batch shape (every axis but the
+// equations'), C order.
+py::array_t<std::int64_t> new_info(const Operands& ops) {
+  std::vector<py::ssize_t> batch;
+  for (std::size_t k = 0; k < ops.shape.size(); ++k)
+    if (static_cast<int>(k) != ops.axis) batch.push_back(ops.shape[k]);
+  py::array_t<std::int64_t> info(batch);
+  std::fill_n(info.mutable_data(), info.size(), std::int64_t(0));
+  return info;
+}
+
+// The element of the C-ordered batch-shaped array for the system whose first equation is at
+// element `offset`.
+std::ptrdiff_t info_position(std::ptrdiff_t offset, const Operands& ops) {
+  const std::vector<std::ptrdiff_t> index = batch_index(offset, ops.shape, ops.strides, ops.axis);
+  std::ptrdiff_t position = 0, k = 0;
+  for (std::size_t axis = 0; axis < ops.shape.size(); ++axis)
+    if (static_cast<int>(axis) != ops.axis) position = position * ops.shape[axis] + index[k++];
+  return position;
+}
+
+// Runs solver(offset, layout, codes) for every call of the plan with the GIL released; with
+// `info` (from new_info), each call's per-system codes (SolveOptions::info) are copied there and
+// no system's failure raises; otherwise codes is empty and a tridiff
 // exception comes back as a Python one naming the system by its index in the batch axes.
 template <class Solver>
-py::array run_plan(const Operands& ops, const ErrorContext& names, Solver&& solver) {
+py::array run_plan(const Operands& ops, const ErrorContext& names, Solver&& solver,
+                   std::int64_t* info = nullptr) {
   const auto size = static_cast<std::ptrdiff_t>(ops.result.size());
   if (size > 0) {
     const BatchPlan plan = plan_batch(ops.shape, ops.strides, ops.axis);
@@ -107,9 +133,14 @@ py::array run_plan(const Operands& ops, const ErrorContext& names, Solver&& solv
     std::ptrdiff_t failed_call = 0;
     {
       py::gil_scoped_release release;
+      std::vector<std::ptrdiff_t> codes(info ? plan.layout.systems() : 0);
       for (std::ptrdiff_t k = 0; k < plan.calls() && !failure; ++k) {
         try {
-          solver(plan.call_offset(k), plan.layout);
+          solver(plan.call_offset(k), plan.layout, std::span<std::ptrdiff_t>(codes));
+          if (info)
+            for (std::ptrdiff_t system = 0; system < plan.layout.systems(); ++system)
+              info[info_position(plan.call_offset(k) + system * plan.layout.system_stride, ops)] =
+                  codes[system];
         } catch (...) {
           failure = std::current_exception();
           failed_call = k;
@@ -150,10 +181,21 @@ const ErrorContext kGeneralNames{
     {{"sub", "a"}, {"diag", "b"}, {"super", "c"}, {"rhs", "d"}, {"x", "out"}}, {}};
 const ErrorContext kDiffusionNames{{{"rhs", "d"}, {"x", "out"}}, {}};
 
+std::int64_t* info_data(const py::object& info) {
+  if (info.is_none()) return nullptr;
+  return py::reinterpret_borrow<py::array_t<std::int64_t>>(info).mutable_data();
+}
+
+// x, or (x, info) when `info`.
+py::object with_info(py::array x, const py::object& info) {
+  if (info.is_none()) return x;
+  return py::make_tuple(x, info);
+}
+
 template <class T>
-py::array solve_typed(const py::array& a, const py::array& b, const py::array& c,
-                      const py::array& d, int axis, const SolveOptions& options,
-                      const py::object& out) {
+py::object solve_typed(const py::array& a, const py::array& b, const py::array& c,
+                       const py::array& d, int axis, const SolveOptions& options,
+                       const py::object& out, bool info) {
   const py::dtype dtype = py::dtype::of<T>();
   Operands ops = gather_operands(
       {{"a", a, dtype}, {"b", b, dtype}, {"c", c, dtype}, {"d", d, dtype}}, out, dtype, axis);
@@ -162,14 +204,18 @@ py::array solve_typed(const py::array& a, const py::array& b, const py::array& c
   const T* super = data_of<T>(ops.inputs[2]);
   const T* rhs = data_of<T>(ops.inputs[3]);
   T* x = static_cast<T*>(ops.result.mutable_data());
-  return run_plan(ops, kGeneralNames, [&](std::ptrdiff_t o, const BatchLayout& layout) {
-    solve(sub + o, diag + o, super + o, rhs + o, x + o, layout, options);
-  });
+  py::object codes = info ? py::object(new_info(ops)) : py::none();
+  auto solver = [&](std::ptrdiff_t o, const BatchLayout& layout, std::span<std::ptrdiff_t> status) {
+    SolveOptions call = options;
+    call.info = status;
+    solve(sub + o, diag + o, super + o, rhs + o, x + o, layout, call);
+  };
+  return with_info(run_plan(ops, kGeneralNames, solver, info_data(codes)), codes);
 }
 
 template <class T>
-py::array solve_diffusion_typed(const py::array& beta, const py::array& d, int axis,
-                                const SolveOptions& options, const py::object& out) {
+py::object solve_diffusion_typed(const py::array& beta, const py::array& d, int axis,
+                                 const SolveOptions& options, const py::object& out, bool info) {
   using R = real_t<T>;
   const py::dtype dtype = py::dtype::of<T>();
   Operands ops =
@@ -177,14 +223,18 @@ py::array solve_diffusion_typed(const py::array& beta, const py::array& d, int a
   const R* conductance = data_of<R>(ops.inputs[0]);
   const T* rhs = data_of<T>(ops.inputs[1]);
   T* x = static_cast<T*>(ops.result.mutable_data());
-  return run_plan(ops, kDiffusionNames, [&](std::ptrdiff_t o, const BatchLayout& layout) {
-    solve_diffusion(conductance + o, rhs + o, x + o, layout, options);
-  });
+  py::object codes = info ? py::object(new_info(ops)) : py::none();
+  auto solver = [&](std::ptrdiff_t o, const BatchLayout& layout, std::span<std::ptrdiff_t> status) {
+    SolveOptions call = options;
+    call.info = status;
+    solve_diffusion(conductance + o, rhs + o, x + o, layout, call);
+  };
+  return with_info(run_plan(ops, kDiffusionNames, solver, info_data(codes)), codes);
 }
 
 // Calls body.template operator()<T>() for the scalar type of `d`'s dtype.
 template <class Body>
-py::array dispatch_scalar(const py::array& d, Body&& body) {
+py::object dispatch_scalar(const py::array& d, Body&& body) {
   const py::dtype dtype = d.dtype();
   if (dtype.equal(py::dtype::of<double>())) return body.template operator()<double>();
   if (dtype.equal(py::dtype::of<float>())) return body.template operator()<float>();
@@ -216,6 +266,12 @@ method: "auto" (Thomas, vectorised across systems, for diagonally dominant syste
 periodic: cyclic systems (see above).
 threads: 0 for all cores.
 out: an array of d's shape and dtype to write x into; may be d itself (in place).
+info: if True, returns (x, info) and raises nothing for a system that fails: info is an int64
+    array of the batch shape (d's shape without `axis`) holding each system's status, as
+    LAPACK's: 0 solved; k > 0 the method broke down at row k - 1 (singular, not diagonally
+    dominant for a pivot-free method, or an overflowing solution); -1, -2, -3, -4 a non-finite
+    a, b, c, d (-5: beta of solve_diffusion not finite or negative). Every other system is
+    solved; x of a failing system is unspecified.
 
 Raises ValueError for a bad argument (naming it, and the system and row for a bad value:
 `argument`, `system` (the index in the batch axes) and `row` attributes), and
@@ -239,31 +295,31 @@ void bind_solvers(py::module_& module) {
   module.def(
       "solve",
       [](py::handle a, py::handle b, py::handle c, py::handle d, int axis,
-         const std::string& method, bool periodic, int threads, py::object out) {
+         const std::string& method, bool periodic, int threads, py::object out, bool info) {
         const SolveOptions options = solve_options(method, periodic, threads);
         const py::array rhs = as_array(d);
         const py::array sub = as_array(a), diag = as_array(b), super = as_array(c);
         return dispatch_scalar(rhs, [&]<class T>() {
-          return solve_typed<T>(sub, diag, super, rhs, axis, options, out);
+          return solve_typed<T>(sub, diag, super, rhs, axis, options, out, info);
         });
       },
       py::arg("a"), py::arg("b"), py::arg("c"), py::arg("d"), py::arg("axis") = -1,
       py::arg("method") = "auto", py::arg("periodic") = false, py::arg("threads") = 0,
-      py::arg("out") = py::none(), kSolveDoc);
+      py::arg("out") = py::none(), py::arg("info") = false, kSolveDoc);
   module.def(
       "solve_diffusion",
       [](py::handle beta, py::handle d, int axis, const std::string& method, bool periodic,
-         int threads, py::object out) {
+         int threads, py::object out, bool info) {
         const SolveOptions options = solve_options(method, periodic, threads);
         const py::array rhs = as_array(d);
         const py::array conductance = as_array(beta);
         return dispatch_scalar(rhs, [&]<class T>() {
-          return solve_diffusion_typed<T>(conductance, rhs, axis, options, out);
+          return solve_diffusion_typed<T>(conductance, rhs, axis, options, out, info);
         });
       },
       py::arg("beta"), py::arg("d"), py::arg("axis") = -1, py::arg("method") = "auto",
       py::arg("periodic") = false, py::arg("threads") = 0, py::arg("out") = py::none(),
-      kSolveDiffusionDoc);
+      py::arg("info") = false, kSolveDiffusionDoc);
   py::list methods;
   for (const MethodRow& row : kMethodTable) methods.append(row.name);
   module.attr("solver_methods") = py::tuple(methods);

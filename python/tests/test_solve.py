@@ -267,3 +267,42 @@ def test_pivot_free_method_refuses_unsafe_matrix():
         tridiff.solve(a, b, c, np.ones(3), method="thomas")
     x = tridiff.solve(a, b, c, np.ones(3))  # auto pivots
     assert relative_error(x, banded_reference(a, b, c, np.ones(3), 0)) < 1e-14
+
+
+@pytest.mark.parametrize("axis", [0, 1, 2])
+def test_info_reports_each_system_and_solves_the_others(axis):
+    """info=True: a status per system in the batch shape, nothing raised for a bad system, the
+    good ones solved (against solve_banded)."""
+    rng = np.random.default_rng(7)
+    shape = (6, 7, 9)
+    a, b, c, d = dominant_system(rng, shape, np.float64)
+    a, b, c, d = (np.moveaxis(v, -1, axis) for v in (a, b, c, d))
+    singular = (1, 2)  # batch index; the equations run along `axis`
+    not_finite = (4, 5)
+    view = lambda v, index: np.moveaxis(v, axis, -1)[index]  # noqa: E731 (one system)
+    for v in (a, b, c):
+        view(v, singular)[:] = 0  # the zero matrix: Thomas stops at its first row
+    view(d, not_finite)[3] = np.inf
+    x, info = tridiff.solve(a, b, c, d, axis=axis, info=True)
+    expected = np.zeros(shape[:2], np.int64)
+    expected[singular] = 1  # breakdown at row 0, reported 1-based as LAPACK does
+    expected[not_finite] = -4  # d
+    assert info.dtype == np.int64 and info.shape == shape[:2]
+    assert np.array_equal(info, expected)
+    good = np.ones(shape[:2], bool)
+    good[singular] = good[not_finite] = False
+    xs, ds = np.moveaxis(x, axis, -1), np.moveaxis(d, axis, -1)
+    reference = banded_reference(*(np.moveaxis(v, axis, -1)[good] for v in (a, b, c)),
+                                 ds[good], axis=-1)
+    assert relative_error(xs[good], reference) < tolerance(np.float64, shape[2])
+
+
+def test_info_of_solve_diffusion_names_a_negative_beta():
+    beta = np.full((5, 12), 0.5)
+    d = np.ones((5, 12))
+    beta[2, 4] = -1.0
+    x, info = tridiff.solve_diffusion(beta, d, info=True)
+    assert np.array_equal(info, [0, 0, -5, 0, 0])
+    assert np.allclose(x[[0, 1, 3, 4]], 1.0)  # rhs = 1 is a fixed point of the diffusion
+    without = tridiff.solve_diffusion(beta[[0, 1, 3, 4]], d[[0, 1, 3, 4]])
+    assert np.array_equal(x[[0, 1, 3, 4]], without)

@@ -10,15 +10,30 @@ class LinAlgError(np.linalg.LinAlgError):
 
 solver_methods: tuple[str, ...]
 
+@overload
 def solve(
     a: npt.ArrayLike, b: npt.ArrayLike, c: npt.ArrayLike, d: npt.ArrayLike, axis: int = -1,
     method: str = "auto", periodic: bool = False, threads: int = 0,
-    out: np.ndarray | None = None,
+    out: np.ndarray | None = None, info: Literal[False] = False,
 ) -> np.ndarray: ...
+@overload
+def solve(
+    a: npt.ArrayLike, b: npt.ArrayLike, c: npt.ArrayLike, d: npt.ArrayLike, axis: int = -1,
+    method: str = "auto", periodic: bool = False, threads: int = 0,
+    out: np.ndarray | None = None, *, info: Literal[True],
+) -> tuple[np.ndarray, npt.NDArray[np.int64]]: ...
+@overload
 def solve_diffusion(
     beta: npt.ArrayLike, d: npt.ArrayLike, axis: int = -1, method: str = "auto",
     periodic: bool = False, threads: int = 0, out: np.ndarray | None = None,
+    info: Literal[False] = False,
 ) -> np.ndarray: ...
+@overload
+def solve_diffusion(
+    beta: npt.ArrayLike, d: npt.ArrayLike, axis: int = -1, method: str = "auto",
+    periodic: bool = False, threads: int = 0, out: np.ndarray | None = None, *,
+    info: Literal[True],
+) -> tuple[np.ndarray, npt.NDArray[np.int64]]: ...
 def _blur(image: npt.ArrayLike, sigma: float, method: str, border: str = "replicate",
           threads: int = 0) -> npt.NDArray[np.float32]: ...
 def _blur_methods() -> list[dict[str, Any]]: ...
