@@ -258,11 +258,6 @@ int truth_samples() {
     throw std::invalid_argument("TRIDIFF_BENCH_TRUTH_SAMPLES must be a positive count");
   return samples;
 }
-bool has_truth(const std::string& name) {
-  for (std::string_view traced : ray_traced_scene_names())
-    if (traced == name) return true;
-  return false;
-}
 const TruthScore& score_vs_truth(const DofMethod& method, const std::string& name) {
   static std::map<std::pair<std::string, std::string>, TruthScore> scores;
   static std::map<std::string, Image> truths;
@@ -327,7 +322,7 @@ void bm_method(benchmark::State& state, const DofMethod& method, const std::stri
   state.counters["max_error_vs_scatter"] = e.max_abs;
   state.counters["in_focus_max"] = e.in_focus_max;
   state.counters["leakage_vs_scatter"] = e.leakage;
-  if (!has_truth(name)) return;
+  if (!tools::has_truth(name)) return;
   const TruthScore& truth = score_vs_truth(method, name);
   state.counters["psnr_vs_truth"] = truth.psnr;
   state.counters["ssim_vs_truth"] = truth.ssim;

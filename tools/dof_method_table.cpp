@@ -43,11 +43,6 @@ using namespace tridiff;
 // 10 dB below every method's error against it (bench_dof.cpp measures the same).
 constexpr int kTruthSamples = 512;
 
-bool is_ray_traced(std::string_view scene) {
-  const auto names = ray_traced_scene_names();
-  return std::find(names.begin(), names.end(), scene) != names.end();
-}
-
 // The scene's reference image and how it is scored: its thin-lens truth, else `scatter`.
 struct Reference {
   Image image;
@@ -56,7 +51,7 @@ struct Reference {
 
 Reference make_reference(const DofScene& scene, const DofOptions& settings) {
   Reference reference;
-  reference.truth = is_ray_traced(scene.name);
+  reference.truth = tools::has_truth(scene.name);
   if (reference.truth) {
     reference.image =
         tools::cached_lens_truth("results/truth", scene.name, scene.color.width(),

@@ -18,6 +18,7 @@
 #include <fstream>
 #include <limits>
 #include <string>
+#include <string_view>
 
 #include "tridiff/dof/quality.hpp"
 #include "tridiff/dof/truth.hpp"
@@ -32,6 +33,13 @@ struct CachedTruth {
   double cache_psnr = std::numeric_limits<double>::infinity();  // the written file vs the render
   bool from_cache = false;
 };
+
+// Whether `scene` is one of the ray-traced scenes, the ones that have a thin-lens truth.
+inline bool has_truth(std::string_view scene) {
+  for (std::string_view traced : ray_traced_scene_names())
+    if (traced == scene) return true;
+  return false;
+}
 
 inline std::string aperture_tag(const ApertureShape& shape) {
   if (shape.blades == 0) return "circle";

@@ -7,7 +7,6 @@
 #include <complex>
 #include <cstdint>
 #include <exception>
-#include <span>
 #include <string>
 #include <vector>
 
@@ -119,13 +118,17 @@ std::ptrdiff_t info_position(std::ptrdiff_t offset, const Operands& ops) {
   return position;
 }
 
-// Runs solver(offset, layout, codes) for every call of the plan with the GIL released; with
-// `info` (from new_info), each call's per-system codes (SolveOptions::info) are copied there and
-// no system's failure raises; otherwise codes is empty and a tridiff
-// exception comes back as a Python one naming the system by its index in the batch axes.
+// Runs solver(offset, layout, options) for every call of the plan with the GIL released, and
+// returns x, or (x, info) when `info`: then each call's per-system codes (SolveOptions::info)
+// are copied into the status array (new_info) and no system's failure raises. Otherwise a
+// tridiff exception comes back as a Python one naming the system by its index in the batch
+// axes.
 template <class Solver>
-py::array run_plan(const Operands& ops, const ErrorContext& names, Solver&& solver,
-                   std::int64_t* info = nullptr) {
+py::object run_plan(const Operands& ops, const ErrorContext& names, const SolveOptions& options,
+                    bool info, Solver&& solver) {
+  py::object status = info ? py::object(new_info(ops)) : py::none();
+  std::int64_t* codes_out =
+      info ? py::reinterpret_borrow<py::array_t<std::int64_t>>(status).mutable_data() : nullptr;
   const auto size = static_cast<std::ptrdiff_t>(ops.result.size());
   if (size > 0) {
     const BatchPlan plan = plan_batch(ops.shape, ops.strides, ops.axis);
@@ -134,13 +137,15 @@ py::array run_plan(const Operands& ops, const ErrorContext& names, Solver&& solv
     {
       py::gil_scoped_release release;
       std::vector<std::ptrdiff_t> codes(info ? plan.layout.systems() : 0);
+      SolveOptions call = options;
+      call.info = codes;
       for (std::ptrdiff_t k = 0; k < plan.calls() && !failure; ++k) {
         try {
-          solver(plan.call_offset(k), plan.layout, std::span<std::ptrdiff_t>(codes));
+          solver(plan.call_offset(k), plan.layout, call);
           if (info)
             for (std::ptrdiff_t system = 0; system < plan.layout.systems(); ++system)
-              info[info_position(plan.call_offset(k) + system * plan.layout.system_stride, ops)] =
-                  codes[system];
+              codes_out[info_position(plan.call_offset(k) + system * plan.layout.system_stride,
+                                      ops)] = codes[system];
         } catch (...) {
           failure = std::current_exception();
           failed_call = k;
@@ -163,9 +168,13 @@ py::array run_plan(const Operands& ops, const ErrorContext& names, Solver&& solv
       }
     }
   }
-  if (!ops.out) return ops.result;
-  copy_into(py::reinterpret_borrow<py::array>(ops.out), ops.result);
-  return py::reinterpret_borrow<py::array>(ops.out);
+  py::array x = ops.result;
+  if (ops.out) {
+    x = py::reinterpret_borrow<py::array>(ops.out);
+    copy_into(x, ops.result);
+  }
+  if (!info) return x;
+  return py::make_tuple(x, status);
 }
 
 SolveOptions solve_options(const std::string& method, bool periodic, int threads) {
@@ -181,17 +190,6 @@ const ErrorContext kGeneralNames{
     {{"sub", "a"}, {"diag", "b"}, {"super", "c"}, {"rhs", "d"}, {"x", "out"}}, {}};
 const ErrorContext kDiffusionNames{{{"rhs", "d"}, {"x", "out"}}, {}};
 
-std::int64_t* info_data(const py::object& info) {
-  if (info.is_none()) return nullptr;
-  return py::reinterpret_borrow<py::array_t<std::int64_t>>(info).mutable_data();
-}
-
-// x, or (x, info) when `info`.
-py::object with_info(py::array x, const py::object& info) {
-  if (info.is_none()) return x;
-  return py::make_tuple(x, info);
-}
-
 template <class T>
 py::object solve_typed(const py::array& a, const py::array& b, const py::array& c,
                        const py::array& d, int axis, const SolveOptions& options,
@@ -204,13 +202,10 @@ py::object solve_typed(const py::array& a, const py::array& b, const py::array& 
   const T* super = data_of<T>(ops.inputs[2]);
   const T* rhs = data_of<T>(ops.inputs[3]);
   T* x = static_cast<T*>(ops.result.mutable_data());
-  py::object codes = info ? py::object(new_info(ops)) : py::none();
-  auto solver = [&](std::ptrdiff_t o, const BatchLayout& layout, std::span<std::ptrdiff_t> status) {
-    SolveOptions call = options;
-    call.info = status;
-    solve(sub + o, diag + o, super + o, rhs + o, x + o, layout, call);
-  };
-  return with_info(run_plan(ops, kGeneralNames, solver, info_data(codes)), codes);
+  return run_plan(ops, kGeneralNames, options, info,
+                  [&](std::ptrdiff_t o, const BatchLayout& layout, const SolveOptions& call) {
+                    solve(sub + o, diag + o, super + o, rhs + o, x + o, layout, call);
+                  });
 }
 
 template <class T>
@@ -223,13 +218,10 @@ py::object solve_diffusion_typed(const py::array& beta, const py::array& d, int 
   const R* conductance = data_of<R>(ops.inputs[0]);
   const T* rhs = data_of<T>(ops.inputs[1]);
   T* x = static_cast<T*>(ops.result.mutable_data());
-  py::object codes = info ? py::object(new_info(ops)) : py::none();
-  auto solver = [&](std::ptrdiff_t o, const BatchLayout& layout, std::span<std::ptrdiff_t> status) {
-    SolveOptions call = options;
-    call.info = status;
-    solve_diffusion(conductance + o, rhs + o, x + o, layout, call);
-  };
-  return with_info(run_plan(ops, kDiffusionNames, solver, info_data(codes)), codes);
+  return run_plan(ops, kDiffusionNames, options, info,
+                  [&](std::ptrdiff_t o, const BatchLayout& layout, const SolveOptions& call) {
+                    solve_diffusion(conductance + o, rhs + o, x + o, layout, call);
+                  });
 }
 
 // Calls body.template operator()<T>() for the scalar type of `d`'s dtype.
