@@ -266,7 +266,7 @@ void fill_general(Batch<T>& b, FuzzedDataProvider& in, bool dominant, bool perio
       diag = next_value<T>(in, R(4));
       super = next_value<T>(in, R(-1));
       b.at(b.rhs, s, i) = next_value<T>(in, R(1 + (s + i) % 7));
-      if (dominant) {  // in the solver's own measure of size (|re| + |im|)
+      if (dominant) {  // in |re| + |im|, never below the modulus: dominant with room to spare
         const R off = (reads_sub(i, periodic) ? detail::magnitude(sub) : R(0)) +
                       (reads_super(i, n, periodic) ? detail::magnitude(super) : R(0));
         diag = T(detail::magnitude(diag) + off);

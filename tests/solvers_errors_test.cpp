@@ -745,6 +745,43 @@ TYPED_TEST(SolverErrors, DominanceIsJudgedPerSystemInFullChunksOfRows) {
   }
 }
 
+// Dominance compares moduli, not LAPACK's |re| + |im|: rows b = 2 + 2i, a = c = 1.9 are
+// dominant in |re| + |im| (4 > 3.8) but not in modulus (2.83 < 3.8). The pivot-free methods
+// refuse that system at row 1 (row 0 has no a) in every kernel that judges dominance: the
+// image-rows kernel (a full chunk of lanes), interleaved columns and the scan of one system;
+// Auto pivots it, to the accuracy of partial pivoting.
+template <class T>
+void expect_dominance_in_modulus() {
+  constexpr std::ptrdiff_t n = 40, count = detail::kLanes<T> + 2, culprit = 3;
+  for (Kind kind : {Kind::Rows, Kind::Columns}) {
+    auto batch = valid_batch<T>(n, count, kind);
+    for (std::ptrdiff_t i = 0; i < n; ++i) {
+      batch.at(batch.a, culprit, i) = T(i > 0 ? 1.9 : 0);
+      batch.at(batch.b, culprit, i) = T(2, 2);
+      batch.at(batch.c, culprit, i) = T(i + 1 < n ? 1.9 : 0);
+    }
+    for (Method method : kAllMethods) {
+      SCOPED_TRACE(std::string(to_string(method)) + (kind == Kind::Rows ? " rows" : " columns"));
+      if (is_pivot_free(method)) {
+        expect_numerical_error([&] { run(batch, with(method)); }, culprit, 1, n);
+        continue;
+      }
+      const std::vector<T> x = run(batch, with(method));
+      std::vector<T> xs(n);
+      for (std::ptrdiff_t i = 0; i < n; ++i) xs[i] = x[batch.layout.offset(culprit, i)];
+      EXPECT_LE(backward_error(system_of(batch, culprit), xs), 16 * unit_roundoff<T>());
+    }
+  }
+}
+
+TEST(SolverErrors, DominanceIsJudgedInModulusForComplexFloat) {
+  expect_dominance_in_modulus<std::complex<float>>();
+}
+
+TEST(SolverErrors, DominanceIsJudgedInModulusForComplexDouble) {
+  expect_dominance_in_modulus<std::complex<double>>();
+}
+
 // A dominant system whose solution exceeds the range of the type (diag ~ 1/sqrt(max),
 // rhs ~ max/2, so x ~ max^1.5): NumericalError naming the system, never inf in x, out of
 // place and in place (where the rhs is finite on entry, so it must not be blamed).

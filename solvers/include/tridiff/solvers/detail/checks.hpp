@@ -88,13 +88,13 @@ Dominance dominance_by_row(const SystemView<T>& s, std::ptrdiff_t begin, std::pt
   using R = real_t<T>;
   const R slack = 1 - 4 * epsilon<T>;
   const std::ptrdiff_t n = s.n;
-  auto entry_a = [&](std::ptrdiff_t i) { return (i > 0 || s.periodic) ? magnitude(s.a[i]) : R(0); };
+  auto entry_a = [&](std::ptrdiff_t i) { return (i > 0 || s.periodic) ? modulus(s.a[i]) : R(0); };
   auto entry_c = [&](std::ptrdiff_t i) {
-    return (i + 1 < n || s.periodic) ? magnitude(s.c[i]) : R(0);
+    return (i + 1 < n || s.periodic) ? modulus(s.c[i]) : R(0);
   };
   Dominance result;
   for (std::ptrdiff_t i = begin; i < end; ++i) {
-    const R diagonal = magnitude(s.b[i]);
+    const R diagonal = modulus(s.b[i]);
     if (result.first_row_failure < 0 && diagonal < slack * (entry_a(i) + entry_c(i)))
       result.first_row_failure = i;
     // Column i holds c[i-1] above the diagonal and a[i+1] below it (wrapping when periodic).
@@ -121,9 +121,9 @@ Dominance dominance(const SystemView<T>& s, std::ptrdiff_t begin, std::ptrdiff_t
   with_unit_stride_if_possible(s, [&](auto a, auto b, auto c) {
 #pragma omp simd reduction(+ : row_failures, column_failures)
     for (std::ptrdiff_t i = first; i < last; ++i) {
-      const R diagonal = slack * magnitude(b[i]);
-      row_failures += diagonal < magnitude(a[i]) + magnitude(c[i]);
-      column_failures += diagonal < magnitude(c[i - 1]) + magnitude(a[i + 1]);
+      const R diagonal = slack * modulus(b[i]);
+      row_failures += diagonal < modulus(a[i]) + modulus(c[i]);
+      column_failures += diagonal < modulus(c[i - 1]) + modulus(a[i + 1]);
     }
   });
   const bool edges = begin < first || last < end;
@@ -151,11 +151,11 @@ bool lanes_finite_and_dominant(std::ptrdiff_t n, const T* a, const T* b, const T
     const bool left = i > 0, right = i + 1 < n;
 #pragma omp simd
     for (int l = 0; l < W; ++l) {
-      const R diagonal = magnitude(b[row + l]);
-      const R sub = left ? magnitude(a[row + l]) : R(0);
-      const R super = right ? magnitude(c[row + l]) : R(0);
-      const R above = left ? magnitude(c[row - row_stride + l]) : R(0);
-      const R below = right ? magnitude(a[row + row_stride + l]) : R(0);
+      const R diagonal = modulus(b[row + l]);
+      const R sub = left ? modulus(a[row + l]) : R(0);
+      const R super = right ? modulus(c[row + l]) : R(0);
+      const R above = left ? modulus(c[row - row_stride + l]) : R(0);
+      const R below = right ? modulus(a[row + row_stride + l]) : R(0);
       row_failure[l] = std::max(row_failure[l], R(slack * diagonal < sub + super));
       column_failure[l] = std::max(column_failure[l], R(slack * diagonal < above + below));
       probe[l] += (diagonal + sub + super) * 0;

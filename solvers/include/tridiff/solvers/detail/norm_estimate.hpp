@@ -15,11 +15,6 @@
 namespace tridiff::detail {
 
 template <class T>
-real_t<T> modulus(const T& value) {
-  return std::abs(value);
-}
-
-template <class T>
 real_t<T> norm1_of(const std::vector<T>& x) {
   real_t<T> sum = 0;
   for (const T& value : x) sum += modulus(value);

@@ -177,7 +177,7 @@ bool thomas_rows(std::ptrdiff_t n, const T* a, const T* b, const T* c, const T* 
         previous_w[l] = wi;
         probe[l] += (scale + magnitude(yi) + magnitude(ci)) * 0;
         if constexpr (Check) {
-          const R diagonal = magnitude(bi), sub = magnitude(ai), super = magnitude(ci);
+          const R diagonal = modulus(bi), sub = modulus(ai), super = modulus(ci);
           row_failure[l] = std::max(row_failure[l], R(slack * diagonal < sub + super));
           // Row 0 has no column before it: diagonal_before is 0 there and the test passes.
           column_failure[l] =
