@@ -2,17 +2,19 @@
 
     import numpy as np, tridiff
     x = tridiff.solve(a, b, c, d)            # a[i] x[i-1] + b[i] x[i] + c[i] x[i+1] = d[i]
+    f = tridiff.factor(a, b, c); x = f.solve(d)   # factor once, solve many
     y = tridiff.blur(image, 8.0)             # H x W x C float32, within 1e-3 of the Gaussian
 
 The work is done by the C++ libraries (tridiff._tridiff, built with pybind11); this file only
 re-exports them and picks the blur method for method="auto".
 """
 from . import _tridiff
-from ._tridiff import LinAlgError, dof, solve, solve_diffusion, solver_methods
+from ._tridiff import (Factors, LinAlgError, dof, factor, factor_diffusion, solve,
+                       solve_diffusion, solver_methods)
 
 __all__ = [
-    "LinAlgError", "blur", "blur_methods", "dof", "dof_methods", "solve", "solve_diffusion",
-    "solver_methods", "auto_blur_method",
+    "Factors", "LinAlgError", "blur", "blur_methods", "dof", "dof_methods", "factor",
+    "factor_diffusion", "solve", "solve_diffusion", "solver_methods", "auto_blur_method",
 ]
 
 # method="auto": the first of these whose stated error bound (BlurMethod::max_error) is within

@@ -4,8 +4,11 @@ from typing import Any, Literal
 import numpy as np
 import numpy.typing as npt
 
+from ._tridiff import Factors as Factors
 from ._tridiff import LinAlgError as LinAlgError
 from ._tridiff import dof as dof
+from ._tridiff import factor as factor
+from ._tridiff import factor_diffusion as factor_diffusion
 from ._tridiff import solve as solve
 from ._tridiff import solve_diffusion as solve_diffusion
 from ._tridiff import solver_methods as solver_methods
