@@ -4,6 +4,7 @@
 #   -DBUILD_DIR=<tridiff build tree> -DCONSUMER_DIR=<consumer source> -DWORK_DIR=<scratch>
 #   -DCXX_COMPILER=<compiler of the build tree>
 #   -DSANITIZER_LINK_FLAGS=<what a program linking the build's libraries needs; may be empty>
+#   -DWITH_DISTRIBUTED=<ON if the build has distributed/: then tridiff::distributed is checked>
 foreach(variable BUILD_DIR CONSUMER_DIR WORK_DIR CXX_COMPILER)
   if(NOT DEFINED ${variable})
     message(FATAL_ERROR "run_install_test.cmake: -D${variable}=... is required")
@@ -42,6 +43,9 @@ foreach(file include/tridiff/solvers.hpp include/tridiff/solvers/solve.hpp
     message(FATAL_ERROR "not installed: ${prefix}/${file}")
   endif()
 endforeach()
+if(WITH_DISTRIBUTED AND NOT EXISTS "${prefix}/include/tridiff/distributed/solve.hpp")
+  message(FATAL_ERROR "not installed: ${prefix}/include/tridiff/distributed/solve.hpp")
+endif()
 file(GLOB_RECURSE config "${prefix}/*/tridiffConfig.cmake")
 if(NOT config)
   message(FATAL_ERROR "no tridiffConfig.cmake under ${prefix}")
@@ -65,7 +69,8 @@ endforeach()
 step("configure consumer" "${CMAKE_COMMAND}" -S "${CONSUMER_DIR}" -B "${consumer_build}"
      "-DCMAKE_CXX_COMPILER=${CXX_COMPILER}" -DCMAKE_BUILD_TYPE=Release
      "-DCMAKE_EXE_LINKER_FLAGS=${SANITIZER_LINK_FLAGS}"
-     "-DCMAKE_PREFIX_PATH=${prefix}" -DCMAKE_FIND_USE_PACKAGE_REGISTRY=OFF
+     "-DCMAKE_PREFIX_PATH=${prefix}" "-DWITH_DISTRIBUTED=${WITH_DISTRIBUTED}"
+     -DCMAKE_FIND_USE_PACKAGE_REGISTRY=OFF
      -DCMAKE_FIND_USE_SYSTEM_PACKAGE_REGISTRY=OFF)
 
 # find_package must have used the scratch prefix, not the source or build tree.
