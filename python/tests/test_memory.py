@@ -49,6 +49,14 @@ def calls(a, b, c, d, out, image, depth, with_images=True):
     nan_call(a, b, c, d)
     with pytest.raises(ValueError):
         tridiff.solve(a, b, c, d.astype(np.float32), threads=1)
+    factors = tridiff.factor(a, b, c, threads=1)
+    factors.solve(d, out=out, threads=1)
+    factors.solve(d, trans="T", threads=1)
+    factors.rcond(threads=1)
+    with pytest.raises(tridiff.LinAlgError):
+        tridiff.factor(a, np.zeros_like(b), c, method="pivoting", threads=1)
+    with pytest.raises(ValueError):
+        factors.solve(d[:, :5], threads=1)
     if not with_images:
         return
     tridiff.blur(image, 2.0, threads=1)
