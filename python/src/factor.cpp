@@ -40,8 +40,7 @@ struct Factors {
   Geometry geometry;
   BatchPlan plan;
   py::dtype dtype;
-  std::variant<Parts<float>, Parts<double>, Parts<std::complex<float>>,
-               Parts<std::complex<double>>>
+  std::variant<Parts<float>, Parts<double>, Parts<std::complex<float>>, Parts<std::complex<double>>>
       parts;
 
   bool empty() const {
@@ -117,8 +116,8 @@ template <class T>
 Factors factor_typed(const py::array& a, const py::array& b, const py::array& c, int axis,
                      const FactorOptions& options) {
   const py::dtype dtype = py::dtype::of<T>();
-  const Operands ops = operands_for_factors({{"a", a, dtype}, {"c", c, dtype}, {"b", b, dtype}},
-                                           axis);
+  const Operands ops =
+      operands_for_factors({{"a", a, dtype}, {"c", c, dtype}, {"b", b, dtype}}, axis);
   const T* sub = data_of<T>(ops.inputs[0]);
   const T* super = data_of<T>(ops.inputs[1]);
   const T* diag = data_of<T>(ops.inputs[2]);
@@ -211,11 +210,13 @@ py::array rcond_of(const Factors& factors, int threads) {
         factors.parts);
   // A system of no equations has rcond 1, as ?gtcon returns for n = 0.
   py::array_t<double> result = per_system<double>(
-      factors, 1.0, [&](const auto&, std::ptrdiff_t k, std::ptrdiff_t s) { return estimates[k][s]; });
+      factors, 1.0,
+      [&](const auto&, std::ptrdiff_t k, std::ptrdiff_t s) { return estimates[k][s]; });
   return result.attr("astype")(real);
 }
 
-constexpr const char* kFactorDoc = R"(LU factors of tridiagonal systems along one axis, for repeated solves.
+constexpr const char* kFactorDoc =
+    R"(LU factors of tridiagonal systems along one axis, for repeated solves.
 
 For every index of the other axes (the batch), factors the matrix of
 
@@ -286,10 +287,10 @@ void bind_factors(py::module_& module) {
       .def_property_readonly(
           "pivoted",
           [](const Factors& f) {
-            return per_system<bool>(
-                f, false, [](const auto& parts, std::ptrdiff_t k, std::ptrdiff_t s) {
-                  return parts[k].pivoted(s);
-                });
+            return per_system<bool>(f, false,
+                                    [](const auto& parts, std::ptrdiff_t k, std::ptrdiff_t s) {
+                                      return parts[k].pivoted(s);
+                                    });
           },
           "Whether each system was factored with partial pivoting (an array of the batch "
           "shape).")
@@ -331,8 +332,8 @@ void bind_factors(py::module_& module) {
           return py::cast(factor_diffusion_typed<T>(conductance, axis, options));
         });
       },
-      py::arg("beta"), py::arg("axis") = -1, py::arg("dtype") = py::none(),
-      py::arg("threads") = 0, kFactorDiffusionDoc);
+      py::arg("beta"), py::arg("axis") = -1, py::arg("dtype") = py::none(), py::arg("threads") = 0,
+      kFactorDiffusionDoc);
 }
 
 }  // namespace tridiff::python

@@ -70,8 +70,8 @@ void bring_inputs(Operands& ops, const std::vector<Input>& inputs) {
     if (element_strides(input.array) == ops.geometry.strides) {
       ops.inputs.push_back(input.array);
     } else {
-      ops.inputs.push_back(empty_with_strides(input.dtype, ops.geometry.shape,
-                                              ops.geometry.strides));
+      ops.inputs.push_back(
+          empty_with_strides(input.dtype, ops.geometry.shape, ops.geometry.strides));
       copy_into(ops.inputs.back(), input.array);
     }
   }

@@ -76,7 +76,8 @@ py::object dispatch_scalar(const py::dtype& dtype, const char* name, Body&& body
     return body.template operator()<std::complex<float>>();
   raise_value_error(name, "has dtype " + std::string(py::str(py::handle(dtype))) +
                               "; tridiff solves float32, float64, complex64 and complex128 "
-                              "(convert with " + name + ".astype(numpy.float64))");
+                              "(convert with " +
+                              name + ".astype(numpy.float64))");
 }
 
 template <class T>

@@ -477,12 +477,22 @@ bool check_system_parallel(const SystemView<T>& s, std::ptrdiff_t system, Method
 inline constexpr std::ptrdiff_t kPartitionedMinRows = std::ptrdiff_t(1) << 15;
 
 // Thomas on one long system, cut into parts that run side by side in SIMD lanes, groups of
-// parts shared by the threads (detail/partitioned_lanes.hpp). Returns the number of parts, or
-// 0 if a pivot vanished or the solution overflowed (rhs is then untouched): the caller
-// re-solves by a method that names the row, or pivots.
+// parts shared by the threads (detail/partitioned_lanes.hpp). With `check`, the matrix is
+// tested in the same pass; if that test does not pass, the exact one (check_system_parallel)
+// decides: it throws (non-finite, or not dominant and `method` refuses that), returns false
+// (Auto: pivot), or accepts what the conservative fused test did not, and the parts run
+// unchecked. Returns the number of parts; 0 if a pivot vanished or the solution overflowed
+// (rhs is then untouched: the caller re-solves by a method that names the row, or pivots); -1
+// if Auto must pivot (not dominant).
 template <class T>
-std::ptrdiff_t solve_partitioned(const SystemView<T>& s, Strided<T> x, int threads) {
-  if (!partitioned_lanes(s, x, threads)) return 0;
+std::ptrdiff_t solve_partitioned(const SystemView<T>& s, Strided<T> x, Method method, bool check,
+                                 int threads) {
+  PartOutcome outcome = partitioned_lanes(s, x, threads, check);
+  if (outcome == PartOutcome::NotChecked) {
+    if (!check_system_parallel(s, 0, method, method != Method::Auto, threads)) return -1;
+    outcome = partitioned_lanes(s, x, threads, false);
+  }
+  if (outcome != PartOutcome::Solved) return 0;
   return make_part_layout<T, kPartLanes<T>>(s.n, threads).parts;
 }
 
@@ -530,14 +540,12 @@ SolveReport solve_single(const SystemView<T>& view, Strided<T> x, Method method,
   const SubnormalsKept gradual_underflow;  // see subnormals.hpp
   const Method fast = method == Method::Auto ? Method::Thomas : method;
   if (fast == Method::Thomas) {
-    if (!check || check_system_parallel(view, 0, method, method != Method::Auto, threads)) {
-      const std::ptrdiff_t parts = solve_partitioned(view, x, threads);
-      if (parts > 0) return {fast, 0, static_cast<int>(parts)};
-      if (method == Method::Thomas) {
-        AlignedBuffer<T> work;
-        solve_one(view, x, Method::Thomas, false, 0, work, 0);
-        return {fast, 0, 1};
-      }
+    const std::ptrdiff_t parts = solve_partitioned(view, x, method, check, threads);
+    if (parts > 0) return {fast, 0, static_cast<int>(parts)};
+    if (parts == 0 && method == Method::Thomas) {
+      AlignedBuffer<T> work;
+      solve_one(view, x, Method::Thomas, false, 0, work, 0);
+      return {fast, 0, 1};
     }
   }
   solve_single_pivoting(view, x, 0);

@@ -119,13 +119,27 @@ bool lanes_healthy(const R* margin, const R* probe) {
   return healthy;
 }
 
+// What the check fused into step 1 found in a group: whether every row it saw is dominant, and
+// every column whose neighbours lie in the same part (the columns at the parts' ends are
+// judged by part_ends_dominant, which reads the neighbouring part).
+struct PartDominance {
+  bool rows = true, columns = true;
+};
+
 // Step 1 on one group: writes its parts' two reduced rows. `work` holds 3 * rows * W
-// scalars (the eliminated rows, in L2) and `block` 4 * kTransposeBlock * W.
-template <class T, int W>
+// scalars (the eliminated rows, in L2) and `block` 4 * kTransposeBlock * W. With Check, also
+// tests every coefficient for a finite value and the rows and inner columns for dominance
+// (conservatively, without the slack of dominance_by_row: a failure sends the caller to that
+// exact test), into `dominance`; the inputs are then read once for both.
+template <class T, int W, bool Check = false>
 bool reduce_part_group(const PartGroup<T, W>& group, std::ptrdiff_t rows, T* work, T* block_memory,
-                       ReducedRows<T> reduced) {
+                       ReducedRows<T> reduced, PartDominance* dominance = nullptr) {
   using R = real_t<T>;
   const R tolerance = kVanishingPivot * epsilon<T>;
+  const R slack = 1 - 4 * epsilon<T>;
+  // Per lane: 1 once a row (column) failed; the previous row's |b| and |c| and the |c| before
+  // it, for the column test of row j - 1, finished when row j's |a| is read.
+  R row_failure[W], column_failure[W], diagonal_before[W], super_before[W], super_before2[W];
   T* const block[4] = {block_memory, block_memory + kTransposeBlock * W,
                        block_memory + 2 * kTransposeBlock * W,
                        block_memory + 3 * kTransposeBlock * W};
@@ -160,6 +174,15 @@ bool reduce_part_group(const PartGroup<T, W>& group, std::ptrdiff_t rows, T* wor
           previous_a[l] = T(-1);
           previous_c[l] = T(0);
           previous_d[l] = T(0);
+          if constexpr (Check) {
+            const R diagonal = modulus(b[l]), sub = modulus(a[l]), super = modulus(c[l]);
+            row_failure[l] = R(slack * diagonal < sub + super);
+            column_failure[l] = 0;  // column 0 of the part: part_ends_dominant
+            probe[l] += (diagonal + sub + super) * 0;
+            diagonal_before[l] = diagonal;
+            super_before[l] = super;
+            super_before2[l] = 0;
+          }
         }
         continue;
       }
@@ -181,7 +204,25 @@ bool reduce_part_group(const PartGroup<T, W>& group, std::ptrdiff_t rows, T* wor
         kd[l] = previous_d[l];
         probe[l] += zero_if_finite(previous_d[l]) + zero_if_finite(previous_a[l]) +
                     zero_if_finite(b[l]) + zero_if_finite(eliminated);
+        if constexpr (Check) {
+          const R diagonal = modulus(b[l]), sub = modulus(a[l]), super = modulus(c[l]);
+          row_failure[l] = std::max(row_failure[l], R(slack * diagonal < sub + super));
+          // Column j - 1 (c_{j-2} above, a_j below); column 0 is left to part_ends_dominant.
+          if (j >= 2)
+            column_failure[l] =
+                std::max(column_failure[l], R(slack * diagonal_before[l] < super_before2[l] + sub));
+          probe[l] += (diagonal + sub + super) * 0;
+          super_before2[l] = super_before[l];
+          super_before[l] = super;
+          diagonal_before[l] = diagonal;
+        }
       }
+    }
+  }
+  if constexpr (Check) {  // the part's last column is left to part_ends_dominant
+    for (int l = 0; l < W; ++l) {
+      dominance->rows = dominance->rows && row_failure[l] == 0;
+      dominance->columns = dominance->columns && column_failure[l] == 0;
     }
   }
   // Backward through the kept rows: row j as next_a x_s + x_j + next_c x_{e-1} = next_d,
@@ -345,14 +386,42 @@ PartGroup<T, W> part_group(const SystemView<T>& s, const PartLayout& layout, std
   return group;
 }
 
+// Whether the columns at the ends of group g's parts (their first and last rows, whose
+// neighbours in the column lie in the next or previous part) are dominant, in the conservative
+// test of reduce_part_group<..., true>.
+template <class T, int W>
+bool part_ends_dominant(const SystemView<T>& s, const PartLayout& layout, std::ptrdiff_t g) {
+  using R = real_t<T>;
+  const R slack = 1 - 4 * epsilon<T>;
+  bool dominant = true;
+  for (std::ptrdiff_t p = g * W; p < (g + 1) * W; ++p)
+    for (const std::ptrdiff_t i : {p * layout.rows, p * layout.rows + layout.rows - 1}) {
+      if (i >= s.n) continue;
+      const R above = i > 0 ? modulus(s.c[i - 1]) : R(0);
+      const R below = i + 1 < s.n ? modulus(s.a[i + 1]) : R(0);
+      dominant = dominant && !(slack * modulus(s.b[i]) < above + below);
+    }
+  return dominant;
+}
+
+// What partitioned_lanes did.
+enum class PartOutcome {
+  Solved,
+  NotChecked,  // the fused check did not pass (not finite, not dominant, or a pivot vanished
+               // in step 1): nothing written; the caller runs the exact check
+  BrokeDown,   // a pivot vanished or the solution is not finite; rhs untouched
+};
+
 // Above this size the solution is written with non-temporal stores: it cannot stay in cache.
 inline constexpr std::ptrdiff_t kStreamingBytes = std::ptrdiff_t(16) << 20;
 
 // Solves one system by parts in lanes, groups of parts shared by `threads` threads; x may be
-// s.d (in place). Returns false if a pivot vanished or the solution is not finite; an
-// in-place solve then leaves rhs as it was. a_0 and c_{n-1} are not read.
+// s.d (in place). Unless Solved, rhs is left as it was. a_0 and c_{n-1} are not read. With
+// `check`, step 1 also tests the matrix for finite values and dominance by rows or by columns
+// (what check_system does in two more passes over a, b and c).
 template <class T>
-bool partitioned_lanes(const SystemView<T>& s, Strided<T> x, int threads) {
+PartOutcome partitioned_lanes(const SystemView<T>& s, Strided<T> x, int threads,
+                              bool check = false) {
   constexpr int W = kPartLanes<T>;
   const PartLayout layout = make_part_layout<T, W>(s.n, threads);
   const std::ptrdiff_t rows = layout.rows, m = 2 * layout.parts;
@@ -366,8 +435,10 @@ bool partitioned_lanes(const SystemView<T>& s, Strided<T> x, int threads) {
   T* out = direct ? x.data : storage + 5 * m;
   const bool streaming = direct && s.n * std::ptrdiff_t(sizeof(T)) >= kStreamingBytes;
   const int team = static_cast<int>(std::min<std::ptrdiff_t>(threads, layout.groups));
-  bool reduced_ok = true, finished_ok = true;
-  const SubnormalsKept gradual_underflow;  // for the serial steps; see subnormals.hpp
+  // reduced_ok: step 1 healthy on every group; solved_reduced: step 2; finished_ok: step 3.
+  bool reduced_ok = true, solved_reduced = true, finished_ok = true;
+  bool rows_dominant = true, columns_dominant = true;  // the fused check's verdicts
+  const SubnormalsKept gradual_underflow;              // for the serial steps; see subnormals.hpp
 #pragma omp parallel num_threads(team) if (team > 1)
   {
     const SubnormalsKept team_gradual_underflow;  // each thread has its own MXCSR
@@ -377,20 +448,37 @@ bool partitioned_lanes(const SystemView<T>& s, Strided<T> x, int threads) {
     T* staging = work + 3 * rows * W;
     T* blocks = staging + 5 * rows * W;
     bool ok = true;
+    PartDominance dominance;
 #pragma omp for schedule(static)
     for (std::ptrdiff_t g = 0; g < layout.groups; ++g) {
       const auto group = part_group<T, W>(s, layout, g, out, !direct, staging);
-      ok = reduce_part_group<T, W>(group, rows, work, blocks, reduced) && ok;
+      if (check) {
+        ok = reduce_part_group<T, W, true>(group, rows, work, blocks, reduced, &dominance) && ok;
+        dominance.columns = dominance.columns && part_ends_dominant<T, W>(s, layout, g);
+      } else {
+        ok = reduce_part_group<T, W>(group, rows, work, blocks, reduced) && ok;
+      }
     }
     if (!ok) {
 #pragma omp atomic write
       reduced_ok = false;
     }
+    if (!dominance.rows) {
+#pragma omp atomic write
+      rows_dominant = false;
+    }
+    if (!dominance.columns) {
+#pragma omp atomic write
+      columns_dominant = false;
+    }
 #pragma omp barrier
+    // Step 1 healthy on every group and, when checked, the matrix dominant by rows or by
+    // columns as a whole: the same verdict on every thread.
+    const bool accepted = reduced_ok && (rows_dominant || columns_dominant);
 #pragma omp single
-    if (reduced_ok)
-      reduced_ok = solve_reduced_rows(layout.parts, reduced, storage + 3 * m, storage + 4 * m);
-    if (reduced_ok) {
+    if (accepted)
+      solved_reduced = solve_reduced_rows(layout.parts, reduced, storage + 3 * m, storage + 4 * m);
+    if (accepted && solved_reduced) {
 #pragma omp for schedule(static)
       for (std::ptrdiff_t g = 0; g < layout.groups; ++g) {
         const auto group = part_group<T, W>(s, layout, g, out, !direct, staging);
@@ -406,13 +494,17 @@ bool partitioned_lanes(const SystemView<T>& s, Strided<T> x, int threads) {
       }
     }
   }
-  const bool solved = reduced_ok && finished_ok;
-  if (solved && !direct) {
+  PartOutcome outcome = PartOutcome::Solved;
+  if (!reduced_ok || !(rows_dominant || columns_dominant))
+    outcome = check ? PartOutcome::NotChecked : PartOutcome::BrokeDown;
+  else if (!solved_reduced || !finished_ok)
+    outcome = PartOutcome::BrokeDown;
+  if (outcome == PartOutcome::Solved && !direct) {
 #pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1 && s.n > (1 << 16))
     for (std::ptrdiff_t i = 0; i < s.n; ++i) x[i] = out[i];
   }
   if (shared.size() * std::ptrdiff_t(sizeof(T)) > (std::ptrdiff_t(256) << 20)) shared = {};
-  return solved;
+  return outcome;
 }
 
 }  // namespace tridiff::detail
