@@ -45,15 +45,8 @@
 
 #include <omp.h>
 
+#include "lapack.hpp"
 #include "tridiff/solvers.hpp"
-
-// LAPACK, Fortran calling convention (no character arguments, so no hidden string lengths).
-extern "C" {
-void sgtsv_(const int* n, const int* nrhs, float* dl, float* d, float* du, float* b, const int* ldb,
-            int* info);
-void dgtsv_(const int* n, const int* nrhs, double* dl, double* d, double* du, double* b,
-            const int* ldb, int* info);
-}
 
 namespace {
 
@@ -631,16 +624,6 @@ int main(int argc, char** argv) {
 //       made outside the loop: a float solve refined to a double backward error; bytes
 //       counted as the double problem's 5 arrays, to compare with the double solves.
 // Registered at static initialisation, so that this section needs no line elsewhere.
-extern "C" {
-void sgttrf_(const int* n, float* dl, float* d, float* du, float* du2, int* ipiv, int* info);
-void dgttrf_(const int* n, double* dl, double* d, double* du, double* du2, int* ipiv, int* info);
-void sgttrs_(const char* trans, const int* n, const int* nrhs, const float* dl, const float* d,
-             const float* du, const float* du2, const int* ipiv, float* b, const int* ldb,
-             int* info, std::size_t trans_length);
-void dgttrs_(const char* trans, const int* n, const int* nrhs, const double* dl, const double* d,
-             const double* du, const double* du2, const int* ipiv, double* b, const int* ldb,
-             int* info, std::size_t trans_length);
-}
 
 namespace {
 

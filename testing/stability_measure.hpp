@@ -13,22 +13,8 @@
 #include <utility>
 #include <vector>
 
+#include "lapack.hpp"
 #include "reference.hpp"
-
-// LAPACK (Fortran, Debian liblapack-dev). ?gtsv: Gaussian elimination with partial pivoting on
-// a tridiagonal system, overwriting b with x; info > 0 means U(info, info) is exactly zero.
-// dgttrf + dgtcon: the LU factors and an estimate of the reciprocal 1-norm condition number.
-// gfortran passes the length of a CHARACTER argument as a trailing hidden size_t.
-extern "C" {
-void sgtsv_(const int* n, const int* nrhs, float* dl, float* d, float* du, float* b, const int* ldb,
-            int* info);
-void dgtsv_(const int* n, const int* nrhs, double* dl, double* d, double* du, double* b,
-            const int* ldb, int* info);
-void dgttrf_(const int* n, double* dl, double* d, double* du, double* du2, int* ipiv, int* info);
-void dgtcon_(const char* norm, const int* n, const double* dl, const double* d, const double* du,
-             const double* du2, const int* ipiv, const double* anorm, double* rcond, double* work,
-             int* iwork, int* info, std::size_t norm_length);
-}
 
 namespace tridiff::test {
 

@@ -12,26 +12,8 @@
 
 #include "reference.hpp"
 #include "stability_matrices.hpp"
+#include "lapack.hpp"
 #include "tridiff/solvers.hpp"
-
-extern "C" {
-void sgttrf_(const int* n, float* dl, float* d, float* du, float* du2, int* ipiv, int* info);
-void dgttrf_(const int* n, double* dl, double* d, double* du, double* du2, int* ipiv, int* info);
-void sgttrs_(const char* trans, const int* n, const int* nrhs, const float* dl, const float* d,
-             const float* du, const float* du2, const int* ipiv, float* b, const int* ldb,
-             int* info, std::size_t trans_length);
-void dgttrs_(const char* trans, const int* n, const int* nrhs, const double* dl, const double* d,
-             const double* du, const double* du2, const int* ipiv, double* b, const int* ldb,
-             int* info, std::size_t trans_length);
-void dgtcon_(const char* norm, const int* n, const double* dl, const double* d, const double* du,
-             const double* du2, const int* ipiv, const double* anorm, double* rcond, double* work,
-             int* iwork, int* info, std::size_t norm_length);
-void dgtrfs_(const char* trans, const int* n, const int* nrhs, const double* dl, const double* d,
-             const double* du, const double* dlf, const double* df, const double* duf,
-             const double* du2, const int* ipiv, const double* b, const int* ldb, double* x,
-             const int* ldx, double* ferr, double* berr, double* work, int* iwork, int* info,
-             std::size_t trans_length);
-}
 
 namespace tridiff {
 namespace {
