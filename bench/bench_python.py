@@ -39,12 +39,18 @@ def best(function, repeat):
     return min(times)
 
 
-def bench_solve(systems, n, threads, repeat):
+def dominant_systems(systems, n):
+    """a, b, c, d of `systems` diagonally dominant systems of n float64 unknowns."""
     rng = np.random.default_rng(1)
     a = rng.uniform(-1, 1, (systems, n))
     c = rng.uniform(-1, 1, (systems, n))
     b = 3 + rng.uniform(0, 1, (systems, n))
     d = rng.uniform(-1, 1, (systems, n))
+    return a, b, c, d
+
+
+def bench_solve(systems, n, threads, repeat):
+    a, b, c, d = dominant_systems(systems, n)
     out = np.empty_like(d)
     ours = best(lambda: tridiff.solve(a, b, c, d, threads=threads, out=out), repeat)
 
@@ -71,11 +77,7 @@ def bench_solve(systems, n, threads, repeat):
 
 
 def bench_factored(systems, n, threads, repeat):
-    rng = np.random.default_rng(1)
-    a = rng.uniform(-1, 1, (systems, n))
-    c = rng.uniform(-1, 1, (systems, n))
-    b = 3 + rng.uniform(0, 1, (systems, n))
-    d = rng.uniform(-1, 1, (systems, n))
+    a, b, c, d = dominant_systems(systems, n)
     out = np.empty_like(d)
     factors = tridiff.factor(a, b, c, threads=threads)
     ours = best(lambda: factors.solve(d, threads=threads, out=out), repeat)
