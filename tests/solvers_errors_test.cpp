@@ -778,6 +778,35 @@ TEST(SolverErrors, DominanceIsJudgedInModulusForComplexFloat) {
   expect_dominance_in_modulus<std::complex<float>>();
 }
 
+// Entries near the overflow threshold, where |re| + |im| overflows but the modulus does not:
+// a = c = (0.6, 0.6) * max against b = 1 is still judged (and refused) as not dominant.
+template <class T>
+void expect_huge_entries_judged() {
+  using R = real_t<T>;
+  const R huge = R(0.6) * std::numeric_limits<R>::max();
+  constexpr std::ptrdiff_t n = 5;
+  auto batch = valid_batch<T>(n, 1);
+  for (std::ptrdiff_t i = 0; i < n; ++i) {
+    batch.at(batch.a, 0, i) = T(huge, huge);
+    batch.at(batch.b, 0, i) = T(1);
+    batch.at(batch.c, 0, i) = T(huge, huge);
+  }
+  EXPECT_TRUE(std::isfinite(detail::modulus(T(huge, huge))));
+  try {
+    run(batch, with(Method::Thomas));
+    ADD_FAILURE() << "accepted";
+  } catch (const NumericalError& error) {
+    EXPECT_EQ(error.row(), 0);
+    EXPECT_NE(std::string(error.what()).find("not diagonally dominant"), std::string::npos)
+        << error.what();
+  }
+}
+
+TEST(SolverErrors, DominanceOfEntriesNearOverflowIsJudged) {
+  expect_huge_entries_judged<std::complex<float>>();
+  expect_huge_entries_judged<std::complex<double>>();
+}
+
 TEST(SolverErrors, DominanceIsJudgedInModulusForComplexDouble) {
   expect_dominance_in_modulus<std::complex<double>>();
 }

@@ -257,6 +257,33 @@ TYPED_TEST(LongSystem, FusedDominanceTestJudgesRowsAndColumnsAcrossParts) {
     EXPECT_LE(forward_error(x, reference_of(system)), 100 * bound);
   }
   {
+    // -1 2 -1: weakly dominant, accepted by the fused test as by the exact one.
+    SCOPED_TRACE("weakly dominant");
+    auto system = rows_and_columns_failing<T>(n, {}, {});
+    for (std::ptrdiff_t i = 0; i < n; ++i) {
+      system.a[i] = T(i > 0 ? -1 : 0);
+      system.b[i] = T(2);
+      system.c[i] = T(i + 1 < n ? -1 : 0);
+    }
+    std::vector<T> x(n);
+    ASSERT_EQ(solve_fused(system, x), detail::PartOutcome::Solved);
+    EXPECT_LE(backward_error(system, x), backward_bound<T>(Method::Thomas, n));
+  }
+  // Rows failing as above, and one column: inside a part, at a part's last row, or the
+  // system's last column (inside the last, padded part). Not dominant either way, so the
+  // fused test must refuse; it would accept (by columns) if it missed that column.
+  for (const std::ptrdiff_t column : {group + rows * 2 + 100, rows * 6 - 1, n - 1}) {
+    SCOPED_TRACE(::testing::Message() << "column " << column << " not dominant");
+    auto system = rows_and_columns_failing<T>(
+        n, failing_rows, column < n - 1 ? std::vector{column} : std::vector<std::ptrdiff_t>{});
+    if (column == n - 1) {  // no row below: |b| = 1 against |c| = 2 above (rows n-2, n-1 hold)
+      system.b[n - 1] = T(1);
+      system.c[n - 2] = T(2);
+    }
+    std::vector<T> x(n, T(7));
+    EXPECT_EQ(solve_fused(system, x), detail::PartOutcome::NotChecked);
+  }
+  {
     SCOPED_TRACE("dominant neither way");
     const std::ptrdiff_t column = group + rows * 2;  // a part's first row, in the second group
     const auto system = rows_and_columns_failing<T>(n, failing_rows, {column});

@@ -3,6 +3,9 @@
 
 #include <Python.h>
 
+#include <string>
+#include <utility>
+
 namespace tridiff::python {
 
 namespace {
@@ -10,9 +13,18 @@ namespace {
 // tridiff.LinAlgError, created once by register_errors.
 py::handle lin_alg_error;
 
+// What the solvers' messages suggest in C++ terms, as a Python caller writes it.
+constexpr std::pair<const char*, const char*> kPythonSpellings[] = {
+    {"use Method::Pivoting or Method::Auto", "use method='pivoting' or method='auto'"},
+    {"use Factorization::Pivoting or Auto", "use method='pivoting' or method='auto'"},
+};
+
 std::string renamed(std::string text, const ErrorContext& context) {
   for (const auto& [from, to] : context.renames)
     if (text == from) return to;
+  for (const auto& [from, to] : kPythonSpellings)
+    if (const auto at = text.find(from); at != std::string::npos)
+      text.replace(at, std::string(from).size(), to);
   // Names quoted inside a message ("overlaps 'sub'") as well.
   for (const auto& [from, to] : context.renames) {
     const std::string quoted = "'" + from + "'";

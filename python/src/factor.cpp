@@ -147,6 +147,9 @@ py::array solve_with(const Factors& factors, py::handle d_object, const py::obje
   options.threads = threads;
   resolve_threads(threads);
   const py::array d = as_array(d_object);
+  if (!d.dtype().equal(factors.dtype))
+    raise_value_error("d", "has dtype " + dtype_name(d) + "; the factors are " +
+                               dtype_text(factors.dtype) + " (factor in d's dtype, or convert d)");
   if (shape_of(d) != factors.geometry.shape)
     raise_value_error("d", "has shape " + shape_text(shape_of(d)) + ", the factors " +
                                shape_text(factors.geometry.shape));
@@ -328,7 +331,10 @@ void bind_factors(py::module_& module) {
         const FactorOptions options = factor_options("no-pivoting", threads);
         const py::array conductance = as_array(beta);
         const py::dtype type = dtype.is_none() ? conductance.dtype() : py::dtype::from_args(dtype);
-        return dispatch_scalar(type, dtype.is_none() ? "beta" : "dtype", [&]<class T>() {
+        if (!dtype.is_none() && !is_solver_dtype(type))
+          raise_value_error(
+              "dtype", dtype_text(type) + " is not one of float32, float64, complex64, complex128");
+        return dispatch_scalar(type, "beta", [&]<class T>() {
           return py::cast(factor_diffusion_typed<T>(conductance, axis, options));
         });
       },

@@ -64,6 +64,13 @@ void bring_inputs(Operands& ops, const std::vector<Input>& inputs);
 Operands gather_operands(const std::vector<Input>& inputs, const py::object& out,
                          const py::dtype& dtype, int axis);
 
+// Whether `dtype` is one the solvers take: float32, float64, complex64, complex128.
+inline bool is_solver_dtype(const py::dtype& dtype) {
+  return dtype.equal(py::dtype::of<float>()) || dtype.equal(py::dtype::of<double>()) ||
+         dtype.equal(py::dtype::of<std::complex<float>>()) ||
+         dtype.equal(py::dtype::of<std::complex<double>>());
+}
+
 // Calls body.template operator()<T>() for the scalar type T of `dtype`, the dtype of the
 // argument `name`.
 template <class Body>

@@ -70,7 +70,9 @@ void require_finite_rhs(const SystemView<T>& s, std::ptrdiff_t system) {
 // Diagonal dominance of rows [begin, end): the first row that is not dominant, and whether
 // every column of the range is. A matrix is safe for the pivot-free methods if it is dominant
 // by rows or by columns (weakly, with a few ulps of slack for rounding in the caller's own
-// arithmetic).
+// arithmetic). The vectorised tests (dominance's first pass, lanes_finite_and_dominant, the
+// checks fused into thomas_rows and reduce_part_group) compare without that slack: what they
+// accept, this exact scan accepts too, and what they refuse goes to it.
 struct Dominance {
   std::ptrdiff_t first_row_failure = -1;
   bool by_columns = true;
@@ -113,7 +115,6 @@ Dominance dominance_by_row(const SystemView<T>& s, std::ptrdiff_t begin, std::pt
 template <class T>
 Dominance dominance(const SystemView<T>& s, std::ptrdiff_t begin, std::ptrdiff_t end) {
   using R = real_t<T>;
-  const R slack = 1 - 4 * epsilon<T>;
   const std::ptrdiff_t first = std::max<std::ptrdiff_t>(begin, 1);
   const std::ptrdiff_t last = std::min<std::ptrdiff_t>(end, s.n - 1);
   if (first >= last) return dominance_by_row(s, begin, end);
@@ -121,7 +122,7 @@ Dominance dominance(const SystemView<T>& s, std::ptrdiff_t begin, std::ptrdiff_t
   with_unit_stride_if_possible(s, [&](auto a, auto b, auto c) {
 #pragma omp simd reduction(+ : row_failures, column_failures)
     for (std::ptrdiff_t i = first; i < last; ++i) {
-      const R diagonal = slack * modulus(b[i]);
+      const R diagonal = modulus(b[i]);
       row_failures += diagonal < modulus(a[i]) + modulus(c[i]);
       column_failures += diagonal < modulus(c[i - 1]) + modulus(a[i + 1]);
     }
@@ -143,7 +144,6 @@ template <class T, int W>
 bool lanes_finite_and_dominant(std::ptrdiff_t n, const T* a, const T* b, const T* c,
                                std::ptrdiff_t row_stride) {
   using R = real_t<T>;
-  const R slack = 1 - 4 * epsilon<T>;
   R probe[W], row_failure[W], column_failure[W];
   for (int l = 0; l < W; ++l) probe[l] = row_failure[l] = column_failure[l] = 0;
   for (std::ptrdiff_t i = 0; i < n; ++i) {
@@ -156,8 +156,8 @@ bool lanes_finite_and_dominant(std::ptrdiff_t n, const T* a, const T* b, const T
       const R super = right ? modulus(c[row + l]) : R(0);
       const R above = left ? modulus(c[row - row_stride + l]) : R(0);
       const R below = right ? modulus(a[row + row_stride + l]) : R(0);
-      row_failure[l] = std::max(row_failure[l], R(slack * diagonal < sub + super));
-      column_failure[l] = std::max(column_failure[l], R(slack * diagonal < above + below));
+      row_failure[l] = std::max(row_failure[l], R(diagonal < sub + super));
+      column_failure[l] = std::max(column_failure[l], R(diagonal < above + below));
       probe[l] += (diagonal + sub + super) * 0;
     }
   }

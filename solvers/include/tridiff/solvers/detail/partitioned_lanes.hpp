@@ -136,7 +136,6 @@ bool reduce_part_group(const PartGroup<T, W>& group, std::ptrdiff_t rows, T* wor
                        ReducedRows<T> reduced, PartDominance* dominance = nullptr) {
   using R = real_t<T>;
   const R tolerance = kVanishingPivot * epsilon<T>;
-  const R slack = 1 - 4 * epsilon<T>;
   // Per lane: 1 once a row (column) failed; the previous row's |b| and |c| and the |c| before
   // it, for the column test of row j - 1, finished when row j's |a| is read.
   R row_failure[W], column_failure[W], diagonal_before[W], super_before[W], super_before2[W];
@@ -176,7 +175,7 @@ bool reduce_part_group(const PartGroup<T, W>& group, std::ptrdiff_t rows, T* wor
           previous_d[l] = T(0);
           if constexpr (Check) {
             const R diagonal = modulus(b[l]), sub = modulus(a[l]), super = modulus(c[l]);
-            row_failure[l] = R(slack * diagonal < sub + super);
+            row_failure[l] = R(diagonal < sub + super);
             column_failure[l] = 0;  // column 0 of the part: part_ends_dominant
             probe[l] += (diagonal + sub + super) * 0;
             diagonal_before[l] = diagonal;
@@ -206,11 +205,11 @@ bool reduce_part_group(const PartGroup<T, W>& group, std::ptrdiff_t rows, T* wor
                     zero_if_finite(b[l]) + zero_if_finite(eliminated);
         if constexpr (Check) {
           const R diagonal = modulus(b[l]), sub = modulus(a[l]), super = modulus(c[l]);
-          row_failure[l] = std::max(row_failure[l], R(slack * diagonal < sub + super));
+          row_failure[l] = std::max(row_failure[l], R(diagonal < sub + super));
           // Column j - 1 (c_{j-2} above, a_j below); column 0 is left to part_ends_dominant.
           if (j >= 2)
             column_failure[l] =
-                std::max(column_failure[l], R(slack * diagonal_before[l] < super_before2[l] + sub));
+                std::max(column_failure[l], R(diagonal_before[l] < super_before2[l] + sub));
           probe[l] += (diagonal + sub + super) * 0;
           super_before2[l] = super_before[l];
           super_before[l] = super;
@@ -392,14 +391,13 @@ PartGroup<T, W> part_group(const SystemView<T>& s, const PartLayout& layout, std
 template <class T, int W>
 bool part_ends_dominant(const SystemView<T>& s, const PartLayout& layout, std::ptrdiff_t g) {
   using R = real_t<T>;
-  const R slack = 1 - 4 * epsilon<T>;
   bool dominant = true;
   for (std::ptrdiff_t p = g * W; p < (g + 1) * W; ++p)
     for (const std::ptrdiff_t i : {p * layout.rows, p * layout.rows + layout.rows - 1}) {
       if (i >= s.n) continue;
       const R above = i > 0 ? modulus(s.c[i - 1]) : R(0);
       const R below = i + 1 < s.n ? modulus(s.a[i + 1]) : R(0);
-      dominant = dominant && !(slack * modulus(s.b[i]) < above + below);
+      dominant = dominant && !(modulus(s.b[i]) < above + below);
     }
   return dominant;
 }

@@ -1,6 +1,7 @@
 // Scalar helpers shared by the kernels: a strided pointer, a cheap magnitude, finiteness.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <complex>
 #include <cstddef>
@@ -31,14 +32,17 @@ inline real_t<T> magnitude(const T& x) {
 // The modulus |x|, what diagonal dominance compares: CABS1 (magnitude) can be sqrt(2) times
 // the modulus on one side of the test and equal to it on the other, so a dominance test in
 // CABS1 accepts matrices that are not dominant ([[1+i, 2], [2, 2-2i]] is singular). For
-// complex, computed as s * sqrt((re/s)^2 + (im/s)^2) with s = |re| + |im|: no overflow or
-// underflow in the squares, branch-free (it vectorises), and NaN for a non-finite x.
+// complex, computed as s * sqrt((re/s)^2 + (im/s)^2) with s = max(|re|, |im|): no overflow
+// unless the modulus itself overflows, no underflow in the squares, branch-free (it
+// vectorises), and NaN for a NaN or infinite part.
 template <class T>
 inline real_t<T> modulus(const T& x) {
   if constexpr (is_complex_v<T>) {
-    const real_t<T> re = std::abs(x.real()), im = std::abs(x.imag()), s = re + im;
+    const real_t<T> re = std::abs(x.real()), im = std::abs(x.imag()), s = std::max(re, im);
     const real_t<T> p = re / s, q = im / s;
-    return s > 0 ? s * std::sqrt(p * p + q * q) : s;
+    // s is 0 for x = 0, and may be 0 beside a NaN part (std::max drops a NaN second
+    // argument): re + im is 0 or NaN then.
+    return s > 0 ? s * std::sqrt(p * p + q * q) : re + im;
   } else {
     return std::abs(x);
   }

@@ -119,7 +119,6 @@ bool thomas_rows(std::ptrdiff_t n, const T* a, const T* b, const T* c, const T* 
   using R = real_t<T>;
   constexpr std::ptrdiff_t kBlock = kTransposeBlock;
   const R tolerance = kVanishingPivot * epsilon<T>;
-  const R slack = 1 - 4 * epsilon<T>;
   T* multipliers = work;       // c'_i = c_i / pivot_i, lane-contiguous
   T* solution = work + n * W;  // d'_i after the forward sweep, x_i after the backward one
   T* block_a = solution + n * W;
@@ -178,10 +177,10 @@ bool thomas_rows(std::ptrdiff_t n, const T* a, const T* b, const T* c, const T* 
         probe[l] += (scale + magnitude(yi) + magnitude(ci)) * 0;
         if constexpr (Check) {
           const R diagonal = modulus(bi), sub = modulus(ai), super = modulus(ci);
-          row_failure[l] = std::max(row_failure[l], R(slack * diagonal < sub + super));
+          row_failure[l] = std::max(row_failure[l], R(diagonal < sub + super));
           // Row 0 has no column before it: diagonal_before is 0 there and the test passes.
           column_failure[l] =
-              std::max(column_failure[l], R(slack * diagonal_before[l] < super_before2[l] + sub));
+              std::max(column_failure[l], R(diagonal_before[l] < super_before2[l] + sub));
           super_before2[l] = super_before[l];
           super_before[l] = super;
           diagonal_before[l] = diagonal;
@@ -201,8 +200,7 @@ bool thomas_rows(std::ptrdiff_t n, const T* a, const T* b, const T* c, const T* 
   bool healthy = true;
   for (int l = 0; l < W; ++l) {
     if constexpr (Check)  // the last column: |b_{n-1}| against |c_{n-2}|
-      column_failure[l] =
-          std::max(column_failure[l], R(slack * diagonal_before[l] < super_before2[l]));
+      column_failure[l] = std::max(column_failure[l], R(diagonal_before[l] < super_before2[l]));
     healthy = healthy && margin[l] > 0 && probe[l] == 0 &&
               (!Check || row_failure[l] == 0 || column_failure[l] == 0);
   }
