@@ -91,9 +91,7 @@ template <class T, class FactorCall>
 Factors factor_over(const Operands& ops, const ErrorContext& names, FactorCall&& factor_call) {
   Factors factors(ops.geometry, py::dtype::of<T>());
   factors.parts = Parts<T>{};
-  std::ptrdiff_t size = 1;
-  for (std::ptrdiff_t extent : ops.geometry.shape) size *= extent;
-  if (size == 0) return factors;
+  if (ops.inputs.front().size() == 0) return factors;
   factors.plan = plan_batch(ops.geometry.shape, ops.geometry.strides, ops.geometry.axis);
   Parts<T>& parts = std::get<Parts<T>>(factors.parts);
   parts.resize(factors.plan.calls());
@@ -196,26 +194,20 @@ py::array_t<V> per_system(const Factors& factors, V for_empty, Value&& value) {
 
 py::array rcond_of(const Factors& factors, int threads) {
   resolve_threads(threads);
-  const py::dtype real = py::dtype::of<double>().equal(factors.dtype) ||
-                                 py::dtype::of<std::complex<double>>().equal(factors.dtype)
-                             ? py::dtype::of<double>()
-                             : py::dtype::of<float>();
-  // Estimated per call with the GIL released, then placed by system.
-  std::vector<std::vector<double>> estimates(factors.plan.calls());
-  if (!factors.empty())
-    std::visit(
-        [&](const auto& parts) {
-          run_calls(factors.plan, factors.geometry, {}, [&](std::ptrdiff_t k) {
-            const auto rcond = estimate_rcond(parts[k], threads);
-            estimates[k].assign(rcond.begin(), rcond.end());
-          });
-        },
-        factors.parts);
-  // A system of no equations has rcond 1, as ?gtcon returns for n = 0.
-  py::array_t<double> result = per_system<double>(
-      factors, 1.0,
-      [&](const auto&, std::ptrdiff_t k, std::ptrdiff_t s) { return estimates[k][s]; });
-  return result.attr("astype")(real);
+  return std::visit(
+      [&]<class T>(const Parts<T>& parts) -> py::array {
+        using R = real_t<T>;
+        // Estimated per call with the GIL released, then placed by system.
+        std::vector<std::vector<R>> estimates(parts.size());
+        if (!parts.empty())
+          run_calls(factors.plan, factors.geometry, {},
+                    [&](std::ptrdiff_t k) { estimates[k] = estimate_rcond(parts[k], threads); });
+        // A system of no equations has rcond 1, as ?gtcon returns for n = 0.
+        return per_system<R>(factors, R(1), [&](const auto&, std::ptrdiff_t k, std::ptrdiff_t s) {
+          return estimates[k][s];
+        });
+      },
+      factors.parts);
 }
 
 constexpr const char* kFactorDoc =
@@ -226,8 +218,9 @@ For every index of the other axes (the batch), factors the matrix of
     a[i] x[i-1] + b[i] x[i] + c[i] x[i+1] = d[i],   i = 0 .. n-1 along `axis`
 
 (a[0] and c[n-1] are not read) and returns a tridiff.Factors: Factors.solve(d) then solves for
-any number of right-hand sides in turn, about twice as fast as solve() and without its checks
-of the matrix. Periodic systems are not factored.
+any number of right-hand sides in turn, without solve()'s divisions and checks of the matrix
+(1.2-1.5x faster on 4096 x 4096 float64: both are bound by reading three n-long arrays per
+system). Periodic systems are not factored.
 
 a, b, c: arrays of one shape and one dtype: float32, float64, complex64 or complex128.
 method: "auto" (without pivoting for each chunk of diagonally dominant systems, partial

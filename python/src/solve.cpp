@@ -4,9 +4,9 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include <algorithm>
 #include <complex>
 #include <cstdint>
-#include <algorithm>
 #include <string>
 #include <vector>
 
