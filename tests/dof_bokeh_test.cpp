@@ -6,6 +6,8 @@
 #include <cmath>
 #include <memory>
 #include <numbers>
+#include <utility>
+#include <vector>
 
 #include "test_util.hpp"
 #include "tridiff/dof/method.hpp"
@@ -249,6 +251,52 @@ TEST(DofBokeh, SpritesKeepEnergyAndMatchScatter) {
               worst, peak, psnr);
   EXPECT_LT(worst, 0.02 * peak);
   EXPECT_GT(psnr, 45.0);
+}
+
+// The round aperture's sprite, which counts each row's fully covered run and evaluates only
+// the rim, against the disc by brute force: weight max(0, min(1, d/2 + 1/2 - |(dx, dy)|)) over
+// the whole square, normalised, mirror-folded at the border. The sprite is bokeh's output less
+// adi's on the frame with the highlight clamped to the threshold (1: the point of 1000 keeps
+// 1 in the body, 999 in the sprite). Diameters with rims through whole pixels (11: outer 6, so
+// (3, 4) has coverage exactly 1), tiny and large; points inside, at a corner and an edge.
+TEST(DofBokeh, RoundSpriteIsTheDiscByBruteForce) {
+  constexpr std::ptrdiff_t kFrame = 96;
+  const float kExcess = kPoint - 1.f;
+  for (const float diameter : {11.f, 1.5f, 4.f, 20.3f, 63.f})
+    for (const auto& [px, py] : {std::pair{48, 40}, std::pair{2, 1}, std::pair{90, 47}}) {
+      const Image coc = make_coc(kFrame, kFrame, [=](auto, auto) { return diameter; });
+      Image color = filled(kFrame, kFrame, 3, 0.f), clamped = color;
+      for (int c = 0; c < 3; ++c) {
+        color(px, py, c) = kPoint;
+        clamped(px, py, c) = 1.f;
+      }
+      const Image bokeh = run("bokeh", color, coc), body = run("adi", clamped, coc);
+      const double outer = 0.5 * diameter + 0.5;
+      const auto reach = std::ptrdiff_t(std::ceil(outer));
+      std::vector<double> expected(std::size_t(kFrame * kFrame), 0.0);
+      double total = 0;
+      for (std::ptrdiff_t dy = -reach; dy <= reach; ++dy)
+        for (std::ptrdiff_t dx = -reach; dx <= reach; ++dx)
+          total += std::max(0.0, std::min(1.0, outer - std::hypot(double(dx), double(dy))));
+      const auto fold = [](std::ptrdiff_t x) {
+        return x < 0 ? -1 - x : x >= kFrame ? 2 * kFrame - 1 - x : x;
+      };
+      for (std::ptrdiff_t dy = -reach; dy <= reach; ++dy)
+        for (std::ptrdiff_t dx = -reach; dx <= reach; ++dx) {
+          const double cover = std::min(1.0, outer - std::hypot(double(dx), double(dy)));
+          if (cover > 0)
+            expected[std::size_t(fold(py + dy) * kFrame + fold(px + dx))] +=
+                kExcess * cover / total;
+        }
+      double worst = 0;
+      for (std::ptrdiff_t y = 0; y < kFrame; ++y)
+        for (std::ptrdiff_t x = 0; x < kFrame; ++x)
+          for (int c = 0; c < 3; ++c) {
+            const double sprite = double(bokeh(x, y, c)) - double(body(x, y, c));
+            worst = std::max(worst, std::fabs(sprite - expected[std::size_t(y * kFrame + x)]));
+          }
+      EXPECT_LT(worst, 1e-5 * kExcess) << "diameter " << diameter << " at " << px << ", " << py;
+    }
 }
 
 // Below the threshold everywhere (values in [0, 1), the automatic threshold 1): adi's output.

@@ -62,12 +62,31 @@ double ApertureFootprint::coverage(double diameter, float outer, std::ptrdiff_t 
   return 0;
 }
 
+std::ptrdiff_t ApertureFootprint::solid_half_width(float outer, std::ptrdiff_t dy) const {
+  if (kind_ != Kind::circle) return -1;
+  const auto solid = [&](std::ptrdiff_t dx) { return coverage(0, outer, dx, dy) >= 1.0; };
+  // The exact-arithmetic guess, then corrected by coverage itself, which is monotone in |dx|.
+  const double inner = double(outer) - 1;
+  const double room = inner * inner - double(dy * dy);
+  std::ptrdiff_t half = room >= 0 ? static_cast<std::ptrdiff_t>(std::sqrt(room)) : -1;
+  while (half >= 0 && !solid(half)) --half;
+  while (solid(half + 1)) ++half;
+  return half;
+}
+
 double ApertureFootprint::sum(double diameter) const {
   const float bound = outer(diameter);
   const std::ptrdiff_t reach = footprint_reach(bound);
   double total = 0;
   for (std::ptrdiff_t dy = -reach; dy <= reach; ++dy) {
     const std::ptrdiff_t hx = footprint_row_half_width(bound, dy);
+    const std::ptrdiff_t solid = solid_half_width(bound, dy);
+    if (solid >= 0) {  // the circle: 1 inside, and the rim the same on both sides
+      total += double(2 * solid + 1);
+      for (std::ptrdiff_t dx = solid + 1; dx <= hx; ++dx)
+        total += 2 * std::max(0.0, coverage(diameter, bound, dx, dy));
+      continue;
+    }
     for (std::ptrdiff_t dx = -hx; dx <= hx; ++dx) {
       const double c = coverage(diameter, bound, dx, dy);
       if (c > 0) total += c;

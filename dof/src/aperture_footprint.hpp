@@ -41,6 +41,10 @@ class ApertureFootprint {
   double coverage(double diameter, float outer, std::ptrdiff_t dx, std::ptrdiff_t dy) const;
   // The sum of the positive coverages over the offsets with |(dx, dy)| < outer.
   double sum(double diameter) const;
+  // For the circle: the largest dx of row dy whose coverage is exactly 1 (every |dx| up to it
+  // is covered fully; -1 if none), found with coverage's own arithmetic; -1 for the other
+  // shapes. The inside of a large disc is most of it, and needs no square root.
+  std::ptrdiff_t solid_half_width(float outer, std::ptrdiff_t dy) const;
 
  private:
   enum class Kind { circle, polygon, image };

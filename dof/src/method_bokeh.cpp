@@ -121,10 +121,32 @@ Image clamp_highlights(const DofFrame& frame, const Sprites& sprites, float thre
   return body;
 }
 
-// How much of a sprite of signed CoC `light_coc` shows at a pixel of signed CoC `coc`.
+// How much of a sprite of signed CoC `light_coc` shows at a pixel of signed CoC `coc`: the
+// ramp, and nothing of a far sprite on a pixel that is not far (focus.is_far). Written
+// without branches, so that add_solid_run's loop vectorises (GCC does not if-convert a
+// conditional while floating-point comparisons may trap).
 inline float visibility(float coc, float light_coc, FocusTest focus) {
-  if (light_coc > 0 && !focus.is_far(coc)) return 0.f;
-  return std::clamp(coc - light_coc + 2.f, 0.f, 1.f);
+  const float far_from = light_coc > 0 ? focus.sharp_below : -INFINITY;
+  return std::min(std::max(coc - light_coc + 2.f, 0.f), 1.f) * float(coc >= far_from);
+}
+
+// Adds a fully covered run of `count` pixels of row y from x0 (inside the frame) of a sprite
+// to out: add_pixel's arithmetic with coverage 1, a channel at a time.
+void add_solid_run(const float* coc, std::ptrdiff_t count, const Highlight& light,
+                   const float* excess, FocusTest focus, Image& out, std::ptrdiff_t x0,
+                   std::ptrdiff_t y) {
+  // The light's values are locals: the stores to the row could alias them.
+  const float light_coc = light.coc;
+  const double inv_sum = light.inv_sum;
+  for (int c = 0; c < out.channels(); ++c) {
+    float* row = out.plane(c).row(y) + x0;
+    const double amount = double(excess[c]);
+#pragma omp simd
+    for (std::ptrdiff_t i = 0; i < count; ++i) {
+      const double weight = inv_sum * double(visibility(coc[i], light_coc, focus));
+      row[i] += static_cast<float>(weight * amount);  // + 0 where hidden
+    }
+  }
 }
 
 // Adds the part of every sprite that falls in rows [band0, band1) to out.
@@ -142,20 +164,30 @@ void splat_band(const DofFrame& frame, const Sprites& sprites, const ApertureFoo
       continue;  // no fold, and the sprite's rows miss the band
     const double diameter = std::fabs(double(light.coc));
     const float* excess = sprites.excess.data() + light.excess;
+    const auto add_pixel = [&](std::ptrdiff_t dx, std::ptrdiff_t dy, std::ptrdiff_t ty) {
+      const double cover = footprint.coverage(diameter, light.outer, dx, dy);
+      if (!(cover > 0)) return;
+      const std::ptrdiff_t tx = fold(qx + dx, width);
+      const float seen = visibility(coc(tx, ty), light.coc, focus);
+      if (seen == 0) return;
+      const double weight = cover * light.inv_sum * double(seen);
+      for (int c = 0; c < channels; ++c)
+        out(tx, ty, c) += static_cast<float>(weight * double(excess[c]));
+    };
     for (std::ptrdiff_t dy = -reach; dy <= reach; ++dy) {
       const std::ptrdiff_t ty = fold(qy + dy, height);
       if (ty < band0 || ty >= band1) continue;
       const std::ptrdiff_t hx = dof_detail::footprint_row_half_width(light.outer, dy);
-      for (std::ptrdiff_t dx = -hx; dx <= hx; ++dx) {
-        const double cover = footprint.coverage(diameter, light.outer, dx, dy);
-        if (!(cover > 0)) continue;
-        const std::ptrdiff_t tx = fold(qx + dx, width);
-        const float seen = visibility(coc(tx, ty), light.coc, focus);
-        if (seen == 0) continue;
-        const double weight = cover * light.inv_sum * double(seen);
-        for (int c = 0; c < channels; ++c)
-          out(tx, ty, c) += static_cast<float>(weight * double(excess[c]));
-      }
+      // The part of the row covered fully and inside the frame, [-solid, solid], takes the
+      // same sums as add_pixel, in a loop without square roots or folds.
+      std::ptrdiff_t solid = footprint.solid_half_width(light.outer, dy);
+      if (qx - solid < 0 || qx + solid >= width) solid = -1;
+      for (std::ptrdiff_t dx = -hx; dx < std::min<std::ptrdiff_t>(-solid, 0); ++dx)
+        add_pixel(dx, dy, ty);
+      if (solid >= 0)
+        add_solid_run(coc.row(ty) + qx - solid, 2 * solid + 1, light, excess, focus, out,
+                      qx - solid, ty);
+      for (std::ptrdiff_t dx = solid + 1; dx <= hx; ++dx) add_pixel(dx, dy, ty);
     }
   }
 }
