@@ -351,6 +351,26 @@ outputs)
       fail "CoC EXR: signed range [$min, $max] expected to reach below -1 and above 1 px"
     fi
   fi
+
+  # The outputs are encoded side by side: each file holds its own picture (as a run with that
+  # output alone writes it), and no byte depends on the thread count.
+  t=$work/threads
+  mkdir -p "$t"
+  for n in 1 2; do
+    run dof --width 96 --height 54 --threads $n -o "$t/$n.png" --coc-output "$t/${n}_coc.png" \
+      --input-output "$t/${n}_in.png"
+    expect_status 0 "three outputs on $n thread(s)"
+  done
+  run dof --width 96 --height 54 -o "$t/alone.png" --coc-output none
+  expect_status 0 "the output alone"
+  run dof --width 96 --height 54 -o "$t/beside.png" --coc-output "$t/alone_coc.png"
+  expect_status 0 "the CoC output beside it"
+  for name in "" _coc _in; do
+    cmp -s "$t/1$name.png" "$t/2$name.png" || fail "1$name.png and 2$name.png differ"
+  done
+  cmp -s "$t/2.png" "$t/alone.png" || fail "--output differs from the run that writes it alone"
+  cmp -s "$t/2_coc.png" "$t/alone_coc.png" || fail "--coc-output differs from a run without --input-output"
+  cmp -s "$t/2.png" "$t/2_in.png" && fail "--output holds the input"
   ;;
 
 hostile)

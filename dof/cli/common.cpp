@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <exception>
 #include <functional>
 #include <sstream>
 #include <type_traits>
@@ -464,6 +465,27 @@ std::int64_t max_pixels(const Arguments& args) {
 void register_inputs(const Arguments& args, OutputFiles& files) {
   if (args.has("color")) files.input("--color", args.text("color", ""));
   if (args.has("depth")) files.input("--depth", args.text("depth", ""));
+}
+
+void encode_and_stage(const std::vector<Encoding>& encodings, int threads, OutputFiles& files) {
+  const int count = static_cast<int>(encodings.size());
+  const int available = resolve_threads(threads);
+  const int team = std::max(1, std::min(available, count));
+  const int each = std::max(1, available / team);  // threads within one encoding
+  std::vector<std::vector<unsigned char>> bytes(encodings.size());
+  std::vector<std::exception_ptr> errors(encodings.size());
+#pragma omp parallel for num_threads(team) schedule(dynamic, 1) if (team > 1)
+  for (int i = 0; i < count; ++i) {
+    try {
+      bytes[std::size_t(i)] = encodings[std::size_t(i)].encode(each);
+    } catch (...) {
+      errors[std::size_t(i)] = std::current_exception();
+    }
+  }
+  for (std::size_t i = 0; i < encodings.size(); ++i) {
+    if (errors[i]) std::rethrow_exception(errors[i]);
+    files.stage(encodings[i].label, bytes[i]);
+  }
 }
 
 Frame load_frame(const Arguments& args, int threads) {

@@ -95,6 +95,18 @@ std::int64_t max_pixels(const Arguments& args);
 // Registers the --color and --depth files with `files`: no output may replace them.
 void register_inputs(const Arguments& args, OutputFiles& files);
 
+// One output file's bytes to make: the option that names it, and its encoder, given the
+// threads it may use.
+struct Encoding {
+  std::string label;
+  std::function<std::vector<unsigned char>(int threads)> encode;
+};
+
+// Encodes the outputs side by side, as many at once as `threads` allows (each format's
+// compressor is serial: PNG's zlib, EXR's), then stages them with `files` in their order.
+// The first failure in that order is thrown, and nothing after it is staged.
+void encode_and_stage(const std::vector<Encoding>& encodings, int threads, OutputFiles& files);
+
 // The `ipf` subcommand (ipf_command.cpp).
 extern const char* const kIpfUsage;
 int run_ipf(const Arguments& args);

@@ -261,15 +261,27 @@ int run_dof(const cli::Arguments& args) {
 
   const auto write_start = std::chrono::steady_clock::now();
   const WriteOptions write{.threads = plan.threads, .float32 = plan.float32};
-  outputs.stage("--output", encode_image(plan.output, plan.view ? view_picture : result, write));
+  std::vector<cli::Encoding> encodings;
+  encodings.push_back({"--output", [&](int threads) {
+                         WriteOptions options = write;
+                         options.threads = threads;
+                         return encode_image(plan.output, plan.view ? view_picture : result,
+                                             options);
+                       }});
   if (!plan.coc_output.empty())
-    outputs.stage(
-        "--coc-output",
-        encode_image(
-            plan.coc_output, coc_output_image(plan.coc_output, coc.plane(0)),
-            {.encoding = ColorEncoding::Linear, .threads = plan.threads, .float32 = plan.float32}));
+    encodings.push_back(
+        {"--coc-output", [&](int threads) {
+           return encode_image(
+               plan.coc_output, coc_output_image(plan.coc_output, coc.plane(0)),
+               {.encoding = ColorEncoding::Linear, .threads = threads, .float32 = plan.float32});
+         }});
   if (args.has("input-output"))
-    outputs.stage("--input-output", encode_image(args.text("input-output", ""), color, write));
+    encodings.push_back({"--input-output", [&](int threads) {
+                           WriteOptions options = write;
+                           options.threads = threads;
+                           return encode_image(args.text("input-output", ""), color, options);
+                         }});
+  cli::encode_and_stage(encodings, plan.threads, outputs);
   const double write_seconds = seconds(write_start);
 
   std::ostringstream text, json;
