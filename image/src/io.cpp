@@ -3,6 +3,7 @@
 #include "tridiff/image/io.hpp"
 
 #include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/half.h>
 #include <OpenImageIO/imageio.h>
 #include <unistd.h>
 
@@ -600,7 +601,11 @@ void check_encoded(const std::string& path, const OIIO::ImageSpec& spec,
 // The file's bytes as the writer for `path`'s format encodes them.
 std::vector<unsigned char> encode(const std::string& path, const OIIO::ImageSpec& spec,
                                   OIIO::TypeDesc type, const void* pixels) {
+  // Room for the raw pixels up front: the writer appends in small pieces, and growing the
+  // vector step by step copies it and touches fresh pages each time (untouched capacity
+  // costs nothing).
   std::vector<unsigned char> bytes;
+  bytes.reserve(spec.image_bytes() + (std::size_t(1) << 16));
   OIIO::Filesystem::IOVecOutput memory(bytes);
   auto output = OIIO::ImageOutput::create(path);
   if (!output) fail(path, "unknown image format (" + oiio_error() + ")");
@@ -705,7 +710,13 @@ std::vector<unsigned char> encode_image(const std::string& path, const Image& im
   if (format.type == OIIO::TypeDesc::UINT16)
     return encode(path, spec, format.type,
                   quantise<std::uint16_t>(image, format.srgb, options.threads).data());
-  // Float formats take linear values as they are; the writer rounds to half when asked.
+  // Float formats take linear values as they are. Half is rounded here, on the threads (the
+  // writer's own conversion runs on one).
+  if (format.type == OIIO::TypeDesc::HALF) {
+    const auto pixels = interleave<Imath::half>(
+        image, options.threads, [](float value, bool) { return Imath::half(value); });
+    return encode(path, spec, OIIO::TypeDesc::HALF, pixels.data());
+  }
   const auto pixels =
       interleave<float>(image, options.threads, [](float value, bool) { return value; });
   return encode(path, spec, OIIO::TypeDesc::FLOAT, pixels.data());
