@@ -13,6 +13,8 @@
 //   BM_solvers_thomas/float/diffusion/columns:4096x4096/threads:2/real_time
 //   BM_solvers_lapack_gtsv/float/general/rows:4096x4096/threads:2/real_time
 //   BM_solvers_stream_triad/float/array:67108864/threads:2/real_time
+//   BM_solvers_stream_columns/float/lanes:64/threads:2/real_time  (the triad in the column
+//     solve's order, 4096 x 4096: the ceiling of that access pattern)
 //
 // Counters (all rates use wall-clock time):
 //   bytes_per_second    the arrays the method must move at least, each once (general form:
@@ -109,6 +111,21 @@ void stream_triad(float* a, const float* b, const float* c, float s, ptrdiff_t n
   for (ptrdiff_t i = 0; i < n; ++i) a[i] = b[i] + s * c[i];
 }
 
+// The triad in the order the lane kernels walk an image column: chunks of `lanes` columns of
+// a side x side array, each chunk down all its rows, the chunks shared by the threads. With
+// 64 float lanes (the column solve's chunk: 256 bytes a row, rows 16 KiB apart at side 4096)
+// it is the most that access pattern moves; wider chunks show what the short runs cost.
+void stream_triad_columns(float* a, const float* b, const float* c, float s, ptrdiff_t side,
+                          ptrdiff_t lanes, int threads) {
+#pragma omp parallel for num_threads(threads) schedule(static)
+  for (ptrdiff_t first = 0; first < side; first += lanes)
+    for (ptrdiff_t i = 0; i < side; ++i) {
+      const ptrdiff_t row = i * side + first;
+#pragma omp simd
+      for (ptrdiff_t l = 0; l < lanes; ++l) a[row + l] = b[row + l] + s * c[row + l];
+    }
+}
+
 // STREAM counting: copy reads one array and writes one, triad reads two and writes one.
 constexpr double kCopyBytes = 2.0 * sizeof(float) * kStreamElements;
 constexpr double kTriadBytes = 3.0 * sizeof(float) * kStreamElements;
@@ -165,6 +182,20 @@ void bm_stream_triad(benchmark::State& state, int threads) {
     benchmark::ClobberMemory();
   }
   set_counters(state, kTriadBytes, 0, 0, threads);
+}
+
+// The column-order triad on the first 4096 x 4096 floats of the STREAM arrays.
+constexpr ptrdiff_t kColumnSide = 4096;
+static_assert(kColumnSide * kColumnSide <= kStreamElements);
+
+void bm_stream_columns(benchmark::State& state, ptrdiff_t lanes, int threads) {
+  StreamArrays& s = stream_arrays();
+  triad_bytes_per_second(threads);
+  for (auto _ : state) {
+    stream_triad_columns(s.a.data(), s.b.data(), s.c.data(), 3.0f, kColumnSide, lanes, threads);
+    benchmark::ClobberMemory();
+  }
+  set_counters(state, 3.0 * sizeof(float) * kColumnSide * kColumnSide, 0, 0, threads);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -586,6 +617,12 @@ void register_all() {
     finish(benchmark::RegisterBenchmark(
         join({"BM_solvers_stream_triad", "float", array, threads_arg(threads)}).c_str(),
         bm_stream_triad, threads));
+    for (const ptrdiff_t lanes : {64, 256, 1024})
+      finish(benchmark::RegisterBenchmark(
+          join({"BM_solvers_stream_columns", "float", "lanes:" + std::to_string(lanes),
+                threads_arg(threads)})
+              .c_str(),
+          bm_stream_columns, lanes, threads));
   }
   register_solvers<float>("float");
   register_solvers<double>("double");
