@@ -15,9 +15,11 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <sstream>
 #include <system_error>
+#include <type_traits>
 #include <utility>
 
 #include "tridiff/image/color.hpp"
@@ -552,18 +554,21 @@ OIIO::ImageSpec output_spec(const Image& image, const OutputFormat& format,
   return spec;
 }
 
-// The planes interleaved as T, each value passed through store(value, is_colour_plane).
+// The planes interleaved as T, each value passed through store(value, is_colour_plane). The
+// array is left uninitialised (not a std::vector, which zero-fills it on one thread): the
+// threads that write it touch its fresh pages first, each its own rows.
 template <class T, class Store>
-std::vector<T> interleave(const Image& image, int threads, Store store) {
+std::unique_ptr<T[]> interleave(const Image& image, int threads, Store store) {
+  static_assert(std::is_trivially_default_constructible_v<T>);
   const int team = resolve_threads(threads);
   const std::ptrdiff_t width = image.width(), height = image.height();
   const int channels = image.channels(), colour = color_plane_count(channels);
-  std::vector<T> pixels(static_cast<std::size_t>(width * height * channels));
+  std::unique_ptr<T[]> pixels(new T[static_cast<std::size_t>(width * height * channels)]);
 #pragma omp parallel for num_threads(team) schedule(static) if (team > 1)
   for (std::ptrdiff_t y = 0; y < height; ++y) {
     for (int c = 0; c < channels; ++c) {
       const float* row = image.plane(c).row(y);
-      T* out = pixels.data() + y * width * channels + c;
+      T* out = pixels.get() + y * width * channels + c;
       for (std::ptrdiff_t x = 0; x < width; ++x) out[x * channels] = store(row[x], c < colour);
     }
   }
@@ -572,7 +577,7 @@ std::vector<T> interleave(const Image& image, int threads, Store store) {
 
 // sRGB-encodes (when asked) and rounds to T's full range; NaN and negatives become 0.
 template <class T>
-std::vector<T> quantise(const Image& image, bool srgb, int threads) {
+std::unique_ptr<T[]> quantise(const Image& image, bool srgb, int threads) {
   constexpr float kMax = static_cast<float>(std::numeric_limits<T>::max());
   return interleave<T>(image, threads, [srgb](float value, bool colour) {
     if (srgb && colour) value = linear_to_srgb(value);
@@ -706,20 +711,20 @@ std::vector<unsigned char> encode_image(const std::string& path, const Image& im
   const OIIO::ImageSpec spec = output_spec(image, format, extension);
   if (format.type == OIIO::TypeDesc::UINT8)
     return encode(path, spec, format.type,
-                  quantise<std::uint8_t>(image, format.srgb, options.threads).data());
+                  quantise<std::uint8_t>(image, format.srgb, options.threads).get());
   if (format.type == OIIO::TypeDesc::UINT16)
     return encode(path, spec, format.type,
-                  quantise<std::uint16_t>(image, format.srgb, options.threads).data());
+                  quantise<std::uint16_t>(image, format.srgb, options.threads).get());
   // Float formats take linear values as they are. Half is rounded here, on the threads (the
   // writer's own conversion runs on one).
   if (format.type == OIIO::TypeDesc::HALF) {
     const auto pixels = interleave<Imath::half>(
         image, options.threads, [](float value, bool) { return Imath::half(value); });
-    return encode(path, spec, OIIO::TypeDesc::HALF, pixels.data());
+    return encode(path, spec, OIIO::TypeDesc::HALF, pixels.get());
   }
   const auto pixels =
       interleave<float>(image, options.threads, [](float value, bool) { return value; });
-  return encode(path, spec, OIIO::TypeDesc::FLOAT, pixels.data());
+  return encode(path, spec, OIIO::TypeDesc::FLOAT, pixels.get());
 }
 
 void write_image(const std::string& path, const Image& image, const WriteOptions& options) {
