@@ -326,22 +326,44 @@ TEST(DofBokeh, ThreadCountChangesNoBit) {
 }
 
 // A near object (CoC -12) over the right part of a far lamp's sprite (CoC +20) hides that part;
-// the left part is as without it.
+// the left part is as without it. With the hexagon (every pixel on the per-pixel path) and the
+// round aperture (the fully covered runs of its rows on the vectorised path).
 TEST(DofBokeh, NearObjectOccludesTheSprite) {
   Lamps f{filled(96, 96, 3, 0.f), make_coc(96, 96, [](auto, auto) { return 20.f; })};
   f.color(44, 48, 0) = f.color(44, 48, 1) = f.color(44, 48, 2) = 1000.f;
   const Image coc_near = make_coc(96, 96, [](auto x, auto) { return x >= 48 ? -12.f : 20.f; });
-  const Image open = run("bokeh", f.color, f.coc, bladed(6));
-  const Image hidden = run("bokeh", f.color, coc_near, bladed(6));
-  double open_left = 0, hidden_left = 0, open_right = 0, hidden_right = 0;
-  for (std::ptrdiff_t y = 0; y < 96; ++y)
-    for (std::ptrdiff_t x = 0; x < 96; ++x) {
-      (x < 48 ? open_left : open_right) += open(x, y, 1);
-      (x < 48 ? hidden_left : hidden_right) += hidden(x, y, 1);
-    }
-  EXPECT_GT(open_right, 250.0);  // the hexagon's part right of x = 47.5 (about 40 %)
-  EXPECT_LT(hidden_right, 0.01 * open_right);
-  EXPECT_NEAR(hidden_left / open_left, 1.0, 0.01);
+  for (const DofOptions& aperture : {bladed(6), DofOptions{}}) {
+    const Image open = run("bokeh", f.color, f.coc, aperture);
+    const Image hidden = run("bokeh", f.color, coc_near, aperture);
+    double open_left = 0, hidden_left = 0, open_right = 0, hidden_right = 0;
+    for (std::ptrdiff_t y = 0; y < 96; ++y)
+      for (std::ptrdiff_t x = 0; x < 96; ++x) {
+        (x < 48 ? open_left : open_right) += open(x, y, 1);
+        (x < 48 ? hidden_left : hidden_right) += hidden(x, y, 1);
+      }
+    const int blades = aperture.aperture.blades;
+    EXPECT_GT(open_right, 250.0) << blades;  // the part right of x = 47.5 (about 40 %)
+    EXPECT_LT(hidden_right, 0.01 * open_right) << blades;
+    EXPECT_NEAR(hidden_left / open_left, 1.0, 0.01) << blades;
+  }
+}
+
+// A gain that overflows a float on a highlight is refused, naming it, by both methods that
+// boost (an infinite excess would spread inf, and 0 x inf = NaN on hidden pixels).
+TEST(DofBokeh, OverflowingGainIsRefused) {
+  Lamps f{filled(32, 32, 3, 0.f), make_coc(32, 32, [](auto, auto) { return 8.f; })};
+  f.color(10, 12, 0) = 1e10f;
+  DofOptions settings;
+  settings.highlight_threshold = 1;
+  settings.highlight_gain = 1e30f;
+  for (const char* method : {"bokeh", "scatter"}) {
+    const auto thrown =
+        testing_util::invalid_argument_of([&] { run(method, f.color, f.coc, settings); });
+    EXPECT_EQ(thrown.argument, "highlight_gain") << method;
+    EXPECT_TRUE(testing_util::contains(thrown.message, "pixel (10, 12)")) << method;
+  }
+  settings.highlight_gain = 1e20f;  // 1e30: finite
+  EXPECT_NO_THROW(run("bokeh", f.color, f.coc, settings));
 }
 
 }  // namespace

@@ -472,6 +472,10 @@ void encode_and_stage(const std::vector<Encoding>& encodings, int threads, Outpu
   const int available = resolve_threads(threads);
   const int team = std::max(1, std::min(available, count));
   const int each = std::max(1, available / team);  // threads within one encoding
+  if (team == 1) {  // one at a time, each staged before the next is made: one in memory at most
+    for (const Encoding& encoding : encodings) files.stage(encoding.label, encoding.encode(each));
+    return;
+  }
   std::vector<std::vector<unsigned char>> bytes(encodings.size());
   std::vector<std::exception_ptr> errors(encodings.size());
 #pragma omp parallel for num_threads(team) schedule(dynamic, 1) if (team > 1)

@@ -102,9 +102,10 @@ struct Encoding {
   std::function<std::vector<unsigned char>(int threads)> encode;
 };
 
-// Encodes the outputs side by side, as many at once as `threads` allows (each format's
-// compressor is serial: PNG's zlib, EXR's), then stages them with `files` in their order.
-// The first failure in that order is thrown, and nothing after it is staged.
+// Encodes the outputs side by side, as many at once as `threads` allows (PNG's zlib is
+// serial; OpenEXR compresses on its own thread pool, whatever `threads` says), then stages
+// them with `files` in their order. The first failure in that order is thrown, and nothing
+// after it is staged. On one thread, each is staged before the next is made.
 void encode_and_stage(const std::vector<Encoding>& encodings, int threads, OutputFiles& files);
 
 // The `ipf` subcommand (ipf_command.cpp).

@@ -3,6 +3,7 @@
 #include "aperture_footprint.hpp"
 
 #include <numbers>
+#include <string>
 
 namespace tridiff::dof_detail {
 
@@ -156,6 +157,14 @@ double ApertureFootprint::kernel_bilinear(double u, double v) const {
   };
   return (1 - fv) * ((1 - fu) * at(i, j) + fu * at(i + 1, j)) +
          fv * ((1 - fu) * at(i, j + 1) + fu * at(i + 1, j + 1));
+}
+
+void HighlightBoost::require_finite(float largest, std::ptrdiff_t x, std::ptrdiff_t y) const {
+  if (!(largest > threshold) || std::isfinite(threshold + gain * (largest - threshold))) return;
+  throw InvalidArgument("highlight_gain",
+                        "boosting pixel (" + std::to_string(x) + ", " + std::to_string(y) +
+                            "), largest channel " + std::to_string(largest) + ", by " +
+                            std::to_string(gain) + " overflows a float: lower the gain");
 }
 
 }  // namespace tridiff::dof_detail

@@ -98,6 +98,10 @@ struct HighlightBoost {
   float factor(float largest) const {
     return largest > threshold ? (threshold + gain * (largest - threshold)) / largest : 1.f;
   }
+  // Refuses (InvalidArgument naming highlight_gain) a boost of pixel (x, y), largest channel
+  // `largest`, that overflows a float: every boosted value, and a sprite's excess, is at most
+  // t + gain · (m - t), and an infinite one would spread inf (and 0 · inf = NaN) over the frame.
+  void require_finite(float largest, std::ptrdiff_t x, std::ptrdiff_t y) const;
 };
 
 }  // namespace tridiff::dof_detail

@@ -96,6 +96,7 @@ Sprites find_highlights(const DofFrame& frame, const HighlightBoost& boost,
       Highlight light{.x = x, .y = std::int32_t(y), .coc = coc(x, y)};
       light.excess = sprites.excess.size();
       const float m = largest_channel(color, x, y);
+      boost.require_finite(m, x, y);
       const float share = boost.gain * (m - boost.threshold) / m;
       for (int c = 0; c < channels; ++c) sprites.excess.push_back(color(x, y, c) * share);
       sprites.lights.push_back(light);

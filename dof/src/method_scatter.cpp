@@ -292,6 +292,21 @@ struct LayerSums {
   std::size_t at(std::ptrdiff_t x, std::ptrdiff_t y) const { return std::size_t(y * width + x); }
 };
 
+// Refuses a gain that overflows a float on an out-of-focus pixel (a sharp one is not boosted).
+void require_finite_boosts(const DofFrame& frame, const HighlightBoost& boost) {
+  if (!boost.active()) return;
+  const Image& color = frame.color();
+  const ConstPlane coc = frame.coc();
+  const FocusTest focus = frame.focus();
+  for (std::ptrdiff_t y = 0; y < frame.height(); ++y)
+    for (std::ptrdiff_t x = 0; x < frame.width(); ++x) {
+      if (focus.is_sharp(coc(x, y))) continue;
+      float largest = color(x, y, 0);
+      for (int c = 1; c < color.channels(); ++c) largest = std::max(largest, color(x, y, c));
+      boost.require_finite(largest, x, y);
+    }
+}
+
 // The colour that pixel (x, y), out of focus, spreads: boosted when it is a highlight.
 void source_colour(const Image& color, std::ptrdiff_t x, std::ptrdiff_t y,
                    const HighlightBoost& boost, std::vector<double>& lanes) {
@@ -418,6 +433,7 @@ void run_scatter(Image& out, const DofFrame& frame, const DofOptions& settings, 
   Stages stages(report);
   const ApertureFootprint footprint(settings);
   const HighlightBoost boost{settings.highlight_threshold, settings.highlight_gain};
+  require_finite_boosts(frame, boost);
   const std::vector<Disc> discs = make_discs(frame, footprint);
   const WorkedTiles tiles = worked_tiles(frame, discs, settings.skip_in_focus);
   const DepthLayers layers = sort_into_layers(frame, tiles);
