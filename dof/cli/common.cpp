@@ -478,7 +478,7 @@ void encode_and_stage(const std::vector<Encoding>& encodings, int threads, Outpu
   }
   std::vector<std::vector<unsigned char>> bytes(encodings.size());
   std::vector<std::exception_ptr> errors(encodings.size());
-#pragma omp parallel for num_threads(team) schedule(dynamic, 1) if (team > 1)
+#pragma omp parallel for num_threads(team) schedule(dynamic, 1)
   for (int i = 0; i < count; ++i) {
     try {
       bytes[std::size_t(i)] = encodings[std::size_t(i)].encode(each);

@@ -260,13 +260,14 @@ int run_dof(const cli::Arguments& args) {
   const double method_seconds = seconds(method_start);
 
   const auto write_start = std::chrono::steady_clock::now();
-  const WriteOptions write{.threads = plan.threads, .float32 = plan.float32};
+  // The colour outputs' options, with the threads encode_and_stage gives each.
+  const auto write = [&](int threads) {
+    return WriteOptions{.threads = threads, .float32 = plan.float32};
+  };
   std::vector<cli::Encoding> encodings;
   encodings.push_back({"--output", [&](int threads) {
-                         WriteOptions options = write;
-                         options.threads = threads;
                          return encode_image(plan.output, plan.view ? view_picture : result,
-                                             options);
+                                             write(threads));
                        }});
   if (!plan.coc_output.empty())
     encodings.push_back(
@@ -277,9 +278,8 @@ int run_dof(const cli::Arguments& args) {
          }});
   if (args.has("input-output"))
     encodings.push_back({"--input-output", [&](int threads) {
-                           WriteOptions options = write;
-                           options.threads = threads;
-                           return encode_image(args.text("input-output", ""), color, options);
+                           return encode_image(args.text("input-output", ""), color,
+                                               write(threads));
                          }});
   cli::encode_and_stage(encodings, plan.threads, outputs);
   const double write_seconds = seconds(write_start);

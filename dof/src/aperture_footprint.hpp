@@ -86,6 +86,13 @@ inline std::ptrdiff_t footprint_row_half_width(double outer, std::ptrdiff_t dy) 
   return s > 0 ? static_cast<std::ptrdiff_t>(std::floor(std::sqrt(s))) : -1;
 }
 
+// The largest channel of pixel (x, y): what the highlight threshold and boost look at.
+inline float largest_channel(const Image& color, std::ptrdiff_t x, std::ptrdiff_t y) {
+  float largest = color(x, y, 0);
+  for (int c = 1; c < color.channels(); ++c) largest = std::max(largest, color(x, y, c));
+  return largest;
+}
+
 // The highlight boost of DofOptions, keeping the hue: a pixel whose largest channel m exceeds
 // the threshold t is scaled by (t + gain · (m - t)) / m, so its largest channel becomes
 // t + gain · (m - t) and the ratios between its channels stay (a per-channel boost would push

@@ -53,6 +53,7 @@ namespace {
 using dof_detail::ApertureFootprint;
 using dof_detail::fold;
 using dof_detail::HighlightBoost;
+using dof_detail::largest_channel;
 using dof_detail::Stages;
 
 constexpr float kAutoThreshold = 1.f;  // linear light: brighter than diffuse white
@@ -69,12 +70,6 @@ struct Sprites {
   std::vector<Highlight> lights;  // raster order
   std::vector<float> excess;      // channels per light
 };
-
-float largest_channel(const Image& color, std::ptrdiff_t x, std::ptrdiff_t y) {
-  float largest = color(x, y, 0);
-  for (int c = 1; c < color.channels(); ++c) largest = std::max(largest, color(x, y, c));
-  return largest;
-}
 
 // The out-of-focus highlights of the frame, in raster order, with their excess over the
 // threshold (boosted), and the footprint's normaliser for each.

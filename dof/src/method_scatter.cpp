@@ -81,6 +81,7 @@ namespace {
 using dof_detail::ApertureFootprint;
 using dof_detail::fold;
 using dof_detail::HighlightBoost;
+using dof_detail::largest_channel;
 using dof_detail::Stages;
 
 constexpr std::ptrdiff_t kTile = 32;
@@ -300,10 +301,7 @@ void require_finite_boosts(const DofFrame& frame, const HighlightBoost& boost) {
   const FocusTest focus = frame.focus();
   for (std::ptrdiff_t y = 0; y < frame.height(); ++y)
     for (std::ptrdiff_t x = 0; x < frame.width(); ++x) {
-      if (focus.is_sharp(coc(x, y))) continue;
-      float largest = color(x, y, 0);
-      for (int c = 1; c < color.channels(); ++c) largest = std::max(largest, color(x, y, c));
-      boost.require_finite(largest, x, y);
+      if (!focus.is_sharp(coc(x, y))) boost.require_finite(largest_channel(color, x, y), x, y);
     }
 }
 
@@ -313,9 +311,7 @@ void source_colour(const Image& color, std::ptrdiff_t x, std::ptrdiff_t y,
   const int channels = color.channels();
   for (int c = 0; c < channels; ++c) lanes[std::size_t(c)] = double(color(x, y, c));
   if (!boost.active()) return;
-  float largest = color(x, y, 0);
-  for (int c = 1; c < channels; ++c) largest = std::max(largest, color(x, y, c));
-  const double factor = boost.factor(largest);
+  const double factor = boost.factor(largest_channel(color, x, y));
   for (int c = 0; c < channels; ++c) lanes[std::size_t(c)] *= factor;
 }
 
