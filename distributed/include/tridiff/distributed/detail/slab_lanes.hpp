@@ -1,16 +1,18 @@
 // The two local steps of the distributed solve on one rank's slab of rows, W systems at a time
 // (one SIMD lane each): the modified Thomas reduction (PaScaL_TDMA; Laszlo, Giles & Appleyard
 // 2016) that leaves two boundary rows per system, and the finish from the boundary unknowns.
-// The maths is that of tridiff/solvers/detail/partitioned_lanes.hpp (one long system cut into
-// parts, the parts in lanes); it is written again here because there the lanes are parts of
-// one system with a fixed, cache-sized length, while here they are W systems of one slab that
-// may hold 1 or 2 rows and whose first row couples to the previous rank. (Merging the two
-// kernels is open work.)
+// The row arithmetic is tridiff/solvers/detail/modified_thomas.hpp, shared with the in-process
+// partitioned solve (partitioned_lanes.hpp: the parts of one long system in lanes). What is
+// this file's own is the slab's layout: W systems of one slab, read where they lie (general or
+// diffusion form), that may hold 1 or 2 rows and whose first row couples to the previous rank;
+// the eliminated rows are kept in full for the finish, which substitutes back instead of
+// eliminating again (partitioned_lanes re-reads its inputs: its parts are sized for L2).
 #pragma once
 
 #include <algorithm>
 #include <cstddef>
 
+#include "tridiff/solvers/detail/modified_thomas.hpp"
 #include "tridiff/solvers/detail/scalar.hpp"
 
 namespace tridiff::distributed::detail {
@@ -96,10 +98,8 @@ void reduce_lanes(std::ptrdiff_t m, const Rows& rows, T* dp, T* ap, T* cp, std::
 #pragma omp simd
     for (int l = 0; l < W; ++l) {
       const T pivot = rows.diag(i, l);
-      const T inverse = T(1) / pivot;
-      d[l] = rows.rhs(i, l) * inverse;
-      a[l] = rows.sub(i, l) * inverse;
-      c[l] = rows.super(i, l) * inverse;
+      tridiff::detail::modified_first_row(rows.sub(i, l), pivot, rows.super(i, l), rows.rhs(i, l),
+                                          a[l], c[l], d[l]);
       const bool vanished = !(magnitude(pivot) > R(0));
       probe[l] += (vanished ? R(1) : R(0)) + magnitude(d[l] + a[l] + c[l]) * 0 + rows.flaw(i, l);
     }
@@ -114,12 +114,12 @@ void reduce_lanes(std::ptrdiff_t m, const Rows& rows, T* dp, T* ap, T* cp, std::
 #pragma omp simd
     for (int l = 0; l < W; ++l) {
       const T sub = rows.sub(i, l), diag = rows.diag(i, l);
-      const T eliminated = sub * c_above[l];
-      const T pivot = diag - eliminated;
-      const T inverse = T(1) / pivot;
-      d[l] = (rows.rhs(i, l) - sub * d_above[l]) * inverse;
-      a[l] = -sub * a_above[l] * inverse;
-      c[l] = rows.super(i, l) * inverse;
+      T row_a = a_above[l], row_c = c_above[l], row_d = d_above[l], eliminated;
+      const T pivot = tridiff::detail::modified_forward_row(
+          sub, diag, rows.super(i, l), rows.rhs(i, l), row_a, row_c, row_d, eliminated);
+      a[l] = row_a;
+      c[l] = row_c;
+      d[l] = row_d;
       const bool vanished =
           !(magnitude(pivot) > tolerance * (magnitude(diag) + magnitude(eliminated)));
       probe[l] += (vanished ? R(1) : R(0)) + magnitude(d[l] + a[l] + c[l]) * 0 + rows.flaw(i, l);
@@ -138,21 +138,15 @@ void reduce_lanes(std::ptrdiff_t m, const Rows& rows, T* dp, T* ap, T* cp, std::
     const T* a = ap + i * pitch;
     const T* c = cp + i * pitch;
 #pragma omp simd
-    for (int l = 0; l < W; ++l) {
-      below_d[l] = d[l] - c[l] * below_d[l];
-      below_a[l] = a[l] - c[l] * below_a[l];
-      below_c[l] = -c[l] * below_c[l];
-    }
+    for (int l = 0; l < W; ++l)
+      tridiff::detail::modified_backward_row(a[l], c[l], d[l], below_a[l], below_c[l], below_d[l]);
   }
   // Row 0 drops x_1 for x_{m-1}: its own pivot.
 #pragma omp simd
   for (int l = 0; l < W; ++l) {
-    const T coupling = cp[l], product = coupling * below_a[l];
-    const T pivot = T(1) - product;
-    const T inverse = T(1) / pivot;
-    dp[l] = (dp[l] - coupling * below_d[l]) * inverse;
-    ap[l] *= inverse;
-    cp[l] = -coupling * below_c[l] * inverse;
+    T product;
+    const T pivot = tridiff::detail::modified_close_first_row(below_a[l], below_c[l], below_d[l],
+                                                              ap[l], cp[l], dp[l], product);
     const bool vanished = !(magnitude(pivot) > tolerance * (1 + magnitude(product)));
     probe[l] += (vanished ? R(1) : R(0)) + magnitude(dp[l] + ap[l] + cp[l]) * 0;
   }

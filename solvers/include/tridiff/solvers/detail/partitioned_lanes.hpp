@@ -1,9 +1,10 @@
-// One long system as many short parts side by side in SIMD lanes: the partitioned method of
-// detail/partitioned.hpp (Laszlo, Giles & Appleyard 2016; PaScaL_TDMA) with W parts per vector,
-// so that all lanes advance in lockstep and the division chain of one part hides behind the
-// others. In three steps, as there:
+// One long system as many short parts side by side in SIMD lanes: the partitioned method
+// (Laszlo, Giles & Appleyard 2016; PaScaL_TDMA) with W parts per vector, so that all lanes
+// advance in lockstep and the division chain of one part hides behind the others. In three
+// steps:
 //  1. reduce: each group of W parts is transposed into lanes a block of rows at a time and
-//     eliminated ("modified Thomas"); only the part's first and last rows are kept, as
+//     eliminated by the modified Thomas steps of modified_thomas.hpp (the distributed solve
+//     runs the same steps on a rank's slab); only the part's first and last rows are kept, as
 //        sub x_{s-1} + x_s + super x_{e-1} = rhs   and   sub x_s + x_{e-1} + super x_e = rhs;
 //  2. those 2P rows form a tridiagonal system, solved serially (it is small: P = n / rows);
 //  3. finish: with x_s and x_{e-1} known, each part's interior is a plain Thomas solve, run
@@ -19,6 +20,7 @@
 #include <limits>
 
 #include "tridiff/solvers/detail/checks.hpp"
+#include "tridiff/solvers/detail/modified_thomas.hpp"
 #include "tridiff/solvers/detail/scalar.hpp"
 #include "tridiff/solvers/detail/subnormals.hpp"
 #include "tridiff/solvers/detail/thomas.hpp"
@@ -163,16 +165,11 @@ bool reduce_part_group(const PartGroup<T, W>& group, std::ptrdiff_t rows, T* wor
       if (j == 0) {
 #pragma omp simd
         for (int l = 0; l < W; ++l) {
-          const T inverse = T(1) / b[l];
-          first_a[l] = a[l] * inverse;
-          first_c[l] = c[l] * inverse;
-          first_d[l] = d[l] * inverse;
+          modified_first_row(a[l], b[l], c[l], d[l], first_a[l], first_c[l], first_d[l]);
           margin[l] = magnitude(b[l]) * (1 - tolerance);
           probe[l] =
               zero_if_finite(first_a[l]) + zero_if_finite(first_c[l]) + zero_if_finite(first_d[l]);
-          previous_a[l] = T(-1);
-          previous_c[l] = T(0);
-          previous_d[l] = T(0);
+          modified_forward_start(previous_a[l], previous_c[l], previous_d[l]);
           if constexpr (Check) {
             const R diagonal = modulus(b[l]), sub = modulus(a[l]), super = modulus(c[l]);
             row_failure[l] = R(diagonal < sub + super);
@@ -190,14 +187,11 @@ bool reduce_part_group(const PartGroup<T, W>& group, std::ptrdiff_t rows, T* wor
       T* kd = kept_d + j * W;
 #pragma omp simd
       for (int l = 0; l < W; ++l) {
-        const T eliminated = a[l] * previous_c[l];
-        const T pivot = b[l] - eliminated;
+        T eliminated;
+        const T pivot = modified_forward_row(a[l], b[l], c[l], d[l], previous_a[l], previous_c[l],
+                                             previous_d[l], eliminated);
         const R scale = magnitude(b[l]) + magnitude(eliminated);
         margin[l] = std::min(margin[l], magnitude(pivot) - tolerance * scale);
-        const T inverse = T(1) / pivot;
-        previous_d[l] = (d[l] - a[l] * previous_d[l]) * inverse;
-        previous_a[l] = -a[l] * previous_a[l] * inverse;
-        previous_c[l] = c[l] * inverse;
         ka[l] = previous_a[l];
         kc[l] = previous_c[l];
         kd[l] = previous_d[l];
@@ -227,33 +221,26 @@ bool reduce_part_group(const PartGroup<T, W>& group, std::ptrdiff_t rows, T* wor
   // Backward through the kept rows: row j as next_a x_s + x_j + next_c x_{e-1} = next_d,
   // starting from row m-1, which is x_{e-1} itself.
   T next_a[W], next_c[W], next_d[W];
-  for (int l = 0; l < W; ++l) {
-    next_a[l] = T(0);
-    next_c[l] = T(-1);
-    next_d[l] = T(0);
-  }
+  for (int l = 0; l < W; ++l) modified_backward_start(next_a[l], next_c[l], next_d[l]);
   for (std::ptrdiff_t j = rows - 2; j >= 1; --j) {
     const T* ka = kept_a + j * W;
     const T* kc = kept_c + j * W;
     const T* kd = kept_d + j * W;
 #pragma omp simd
-    for (int l = 0; l < W; ++l) {
-      next_d[l] = kd[l] - kc[l] * next_d[l];
-      next_a[l] = ka[l] - kc[l] * next_a[l];
-      next_c[l] = -kc[l] * next_c[l];
-    }
+    for (int l = 0; l < W; ++l)
+      modified_backward_row(ka[l], kc[l], kd[l], next_a[l], next_c[l], next_d[l]);
   }
   const std::ptrdiff_t base = 2 * group.first_part;
 #pragma omp simd
   for (int l = 0; l < W; ++l) {
     // Row 0 with x_{s+1} substituted from row 1.
-    const T coupling = first_c[l] * next_a[l];
-    const T pivot = T(1) - coupling;
+    T coupling;
+    const T pivot = modified_close_first_row(next_a[l], next_c[l], next_d[l], first_a[l],
+                                             first_c[l], first_d[l], coupling);
     margin[l] = std::min(margin[l], magnitude(pivot) - tolerance * (1 + magnitude(coupling)));
-    const T inverse = T(1) / pivot;
-    reduced.sub[base + 2 * l] = first_a[l] * inverse;
-    reduced.super[base + 2 * l] = -first_c[l] * next_c[l] * inverse;
-    reduced.rhs[base + 2 * l] = (first_d[l] - first_c[l] * next_d[l]) * inverse;
+    reduced.sub[base + 2 * l] = first_a[l];
+    reduced.super[base + 2 * l] = first_c[l];
+    reduced.rhs[base + 2 * l] = first_d[l];
     // Row m-1 as the forward sweep left it.
     reduced.sub[base + 2 * l + 1] = previous_a[l];
     reduced.super[base + 2 * l + 1] = previous_c[l];
