@@ -683,6 +683,9 @@ options)
   refused "mpad at --far-radius 1e6" "--far-radius" "explicit steps" -- \
     dof "${small[@]}" --method mpad --far-start 1 --far-end 1.5 --far-radius 1e6
   [[ $err != *"'coc'"* ]] || fail "the CoC map's error still names 'coc': $err"
+  # Splats that would take days are refused at once (the largest CoC named), not run.
+  refused "scatter at --max-coc 16000" "--max-coc" "weights" -- \
+    dof "${small[@]}" --method scatter --max-coc 16000 --f-number 0.01 --focal-length 600
 
   # The sanity check of this case: the bound itself, and both blur regions, do work.
   run dof "${small[@]}" --threads 1024 --near-start 0.5 --near-end 2 --near-radius 3 \

@@ -366,5 +366,26 @@ TEST(DofBokeh, OverflowingGainIsRefused) {
   EXPECT_NO_THROW(run("bokeh", f.color, f.coc, settings));
 }
 
+// Splats that would take days (64 x 64 pixels of CoC 10^4 px: 3e11 weights) are refused at
+// once, the largest CoC and its pixel named; bokeh splats only its highlights, so the same CoC
+// over a dim frame with one light runs.
+TEST(DofBokeh, SplatsThatWouldNotEndAreRefused) {
+  Lamps f{filled(64, 64, 3, 4.f), make_coc(64, 64, [](auto, auto) { return 1e4f; })};
+  f.coc(5, 7, 0) = -1.2e4f;
+  for (const char* method : {"bokeh", "scatter"}) {
+    const auto thrown = testing_util::invalid_argument_of([&] { run(method, f.color, f.coc, {}); });
+    EXPECT_EQ(thrown.argument, "coc") << method;
+    EXPECT_TRUE(testing_util::contains(thrown.message, "12000 px, at pixel (5, 7)"))
+        << method << ": " << thrown.message;
+  }
+  Image dim = filled(64, 64, 3, 0.5f);
+  dim(20, 20, 0) = 4.f;
+  f.coc(20, 20, 0) = 500.f;  // one sprite of 2e5 weights
+  Image out;
+  EXPECT_NO_THROW(out = run("bokeh", dim, f.coc, {}));
+  EXPECT_EQ(testing_util::invalid_argument_of([&] { run("scatter", dim, f.coc, {}); }).argument,
+            "coc");
+}
+
 }  // namespace
 }  // namespace tridiff

@@ -2,6 +2,7 @@
 // (aperture_footprint.hpp).
 #include "aperture_footprint.hpp"
 
+#include <cstdio>
 #include <numbers>
 #include <string>
 
@@ -165,6 +166,27 @@ void HighlightBoost::require_finite(float largest, std::ptrdiff_t x, std::ptrdif
                         "boosting pixel (" + std::to_string(x) + ", " + std::to_string(y) +
                             "), largest channel " + std::to_string(largest) + ", by " +
                             std::to_string(gain) + " overflows a float: lower the gain");
+}
+
+void SplatWork::add(float coc, std::ptrdiff_t x, std::ptrdiff_t y) {
+  const double radius = 0.5 * std::fabs(double(coc)) + 0.5;
+  weights_ += std::numbers::pi * radius * radius;
+  ++count_;
+  if (std::fabs(coc) > largest_) {
+    largest_ = std::fabs(coc);
+    x_ = x;
+    y_ = y;
+  }
+}
+
+void SplatWork::require_within_budget(const std::string& splats, const std::string& remedy) const {
+  if (weights_ <= kMaxSplatWeights) return;
+  char numbers[160];
+  std::snprintf(numbers, sizeof numbers,
+                " would evaluate %.2g weights (%td splats; the largest |CoC| is %g px, at pixel "
+                "(%td, %td)); at most %.0e are splatted: ",
+                weights_, count_, double(largest_), x_, y_, kMaxSplatWeights);
+  throw InvalidArgument("coc", splats + numbers + remedy);
 }
 
 }  // namespace tridiff::dof_detail

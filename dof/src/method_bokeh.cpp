@@ -27,7 +27,8 @@
 // (light is additive).
 //
 // Cost: O(pixels) for the body (adi's, skipping the tiles in focus) plus O(highlights x CoC^2)
-// for the sprites. Parallel: each thread owns a band of output rows and adds, in raster order of
+// for the sprites; sprites adding up to more than kMaxSplatWeights are refused (SplatWork,
+// aperture_footprint.hpp), naming the largest CoC. Parallel: each thread owns a band of output rows and adds, in raster order of
 // the highlights, the part of every sprite that falls in it: the result does not depend on the
 // number of threads.
 #include <algorithm>
@@ -96,6 +97,10 @@ Sprites find_highlights(const DofFrame& frame, const HighlightBoost& boost,
       for (int c = 0; c < channels; ++c) sprites.excess.push_back(color(x, y, c) * share);
       sprites.lights.push_back(light);
     }
+  dof_detail::SplatWork work;
+  for (const Highlight& light : sprites.lights) work.add(light.coc, light.x, light.y);
+  work.require_within_budget("the highlights' sprites",
+                             "lower the CoC, raise highlight_threshold, or use adi");
   const std::ptrdiff_t count = std::ptrdiff_t(sprites.lights.size());
 #pragma omp parallel for num_threads(frame.threads()) schedule(dynamic, 4)
   for (std::ptrdiff_t i = 0; i < count; ++i) {

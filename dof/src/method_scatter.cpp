@@ -164,20 +164,32 @@ struct Box {
   }
 };
 
-// A disc beyond kMaxDiameter px would take hours: refused rather than clamped silently, naming
-// the first such pixel.
+// A disc beyond kMaxDiameter px, or splats adding up to more than kMaxSplatWeights (SplatWork),
+// would take hours: refused rather than clamped silently, naming the pixel.
 void refuse_what_takes_too_long(const DofFrame& frame) {
   if (frame.width() * frame.height() > std::numeric_limits<std::int32_t>::max())
     throw InvalidArgument("color", "has more than 2^31 pixels");
-  if (frame.max_abs_coc() <= kMaxDiameter) return;
   const ConstPlane coc = frame.coc();
-  for (std::ptrdiff_t y = 0; y < coc.height(); ++y)
-    for (std::ptrdiff_t x = 0; x < coc.width(); ++x)
-      if (std::fabs(coc(x, y)) > kMaxDiameter)
-        throw InvalidArgument("coc", "pixel (" + std::to_string(x) + ", " + std::to_string(y) +
-                                         ") has |CoC| " + std::to_string(std::fabs(coc(x, y))) +
-                                         " px; the scatter reference takes at most " +
-                                         std::to_string(int(kMaxDiameter)) + " px");
+  if (frame.max_abs_coc() > kMaxDiameter)
+    for (std::ptrdiff_t y = 0; y < coc.height(); ++y)
+      for (std::ptrdiff_t x = 0; x < coc.width(); ++x)
+        if (std::fabs(coc(x, y)) > kMaxDiameter)
+          throw InvalidArgument("coc", "pixel (" + std::to_string(x) + ", " + std::to_string(y) +
+                                           ") has |CoC| " + std::to_string(std::fabs(coc(x, y))) +
+                                           " px; the scatter reference takes at most " +
+                                           std::to_string(int(kMaxDiameter)) + " px");
+  dof_detail::SplatWork largest;  // every pixel at the largest CoC: the bound mostly suffices
+  largest.add(frame.max_abs_coc(), 0, 0);
+  if (largest.weights() * double(frame.width() * frame.height()) > dof_detail::kMaxSplatWeights) {
+    const FocusTest focus = frame.focus();
+    dof_detail::SplatWork work;
+    for (std::ptrdiff_t y = 0; y < coc.height(); ++y)
+      for (std::ptrdiff_t x = 0; x < coc.width(); ++x)
+        if (!focus.is_sharp(coc(x, y))) work.add(coc(x, y), x, y);
+    work.require_within_budget("the scatter reference's splats",
+                               "lower the CoC, or use a method whose cost does not grow with it "
+                               "(adi, sat, pyramid-layers; bokeh splats only the highlights)");
+  }
 }
 
 // 1. Every pixel's disc (its normaliser: a sum over the whole disc, computed once).
