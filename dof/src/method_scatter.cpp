@@ -327,12 +327,29 @@ void source_colour(const Image& color, std::ptrdiff_t x, std::ptrdiff_t y,
   for (int c = 0; c < channels; ++c) lanes[std::size_t(c)] *= factor;
 }
 
+// Adds weight w of a source whose colour is `lanes` to pixels [x0, x1] of one row: the fully
+// covered run of a circle's row (coverage exactly 1, no fold). The same arithmetic, pixel for
+// pixel, as the general loop of splat_band, in a loop that vectorises.
+void add_solid_run(double* colour_row, double* cover_row, std::size_t plane_size,
+                   const std::vector<double>& lanes, double w, std::ptrdiff_t x0,
+                   std::ptrdiff_t x1) {
+  for (std::size_t c = 0; c < lanes.size(); ++c) {
+    double* values = colour_row + plane_size * c;
+    const double add = w * lanes[c];
+    for (std::ptrdiff_t x = x0; x <= x1; ++x) values[x] = cover_row[x] == 0 ? add : values[x] + add;
+  }
+  for (std::ptrdiff_t x = x0; x <= x1; ++x) cover_row[x] += w;
+}
+
 // 4a. Splats the part of every disc of layer l that falls in rows [band0, band1); returns the
-// box of the pixels it touched. `covers(diameter, outer, dx, dy)` is the footprint's coverage.
+// box of the pixels it touched. `covers(diameter, outer, dx, dy)` is the footprint's coverage;
+// for the circle, the run of each row that it covers fully (ApertureFootprint::solid_half_width)
+// is added by add_solid_run.
 template <class Covers>
 Box splat_band(const DofFrame& frame, const std::vector<Disc>& discs, const DepthLayers& layers,
                std::size_t l, std::ptrdiff_t band0, std::ptrdiff_t band1, LayerSums& sums,
-               std::vector<double>& lanes, const HighlightBoost& boost, Covers covers) {
+               std::vector<double>& lanes, const HighlightBoost& boost,
+               const ApertureFootprint& footprint, Covers covers) {
   const Image& color = frame.color();
   const std::ptrdiff_t width = frame.width(), height = frame.height();
   const int channels = frame.channels();
@@ -368,19 +385,32 @@ Box splat_band(const DofFrame& frame, const std::vector<Disc>& discs, const Dept
       const bool inside = qx - hx >= 0 && qx + hx < width;
       double* cover_row = cover + sums.at(0, ty);
       double* colour_row = sums.values.data() + sums.at(0, ty);
-      for (std::ptrdiff_t dx = -hx; dx <= hx; ++dx) {
-        const double cov = covers(diameter, disc.outer, dx, dy);
-        if (!(cov > 0)) continue;
-        const double w = cov * disc.inv_sum;
-        const std::ptrdiff_t tx = inside ? qx + dx : fold(qx + dx, width);
-        const double a = cover_row[tx];
-        for (int c = 0; c < channels; ++c) {
-          double& v = colour_row[std::size_t(tx) + plane_size * std::size_t(c)];
-          v = a == 0 ? w * lanes[std::size_t(c)] : v + w * lanes[std::size_t(c)];
+      const auto splat_pixels = [&](std::ptrdiff_t from, std::ptrdiff_t to) {
+        for (std::ptrdiff_t dx = from; dx <= to; ++dx) {
+          const double cov = covers(diameter, disc.outer, dx, dy);
+          if (!(cov > 0)) continue;
+          const double w = cov * disc.inv_sum;
+          const std::ptrdiff_t tx = inside ? qx + dx : fold(qx + dx, width);
+          const double a = cover_row[tx];
+          for (int c = 0; c < channels; ++c) {
+            double& v = colour_row[std::size_t(tx) + plane_size * std::size_t(c)];
+            v = a == 0 ? w * lanes[std::size_t(c)] : v + w * lanes[std::size_t(c)];
+          }
+          cover_row[tx] = a + w;
+          box.add(tx, ty);
         }
-        cover_row[tx] = a + w;
-        box.add(tx, ty);
+      };
+      // A circle's row without a fold: its rims, and between them the run of coverage 1.
+      const std::ptrdiff_t solid = inside ? footprint.solid_half_width(disc.outer, dy) : -1;
+      if (solid < 0) {
+        splat_pixels(-hx, hx);
+        continue;
       }
+      splat_pixels(-hx, -solid - 1);
+      add_solid_run(colour_row, cover_row, plane_size, lanes, disc.inv_sum, qx - solid, qx + solid);
+      box.add(qx - solid, ty);
+      box.add(qx + solid, ty);
+      splat_pixels(solid + 1, hx);
     }
   }
   return box;
@@ -459,11 +489,11 @@ void run_scatter(Image& out, const DofFrame& frame, const DofOptions& settings, 
         for (std::size_t l = 0; l < layers.count() && band0 < band1; ++l) {
           const Box box =
               footprint.is_circle()
-                  ? splat_band(frame, discs, layers, l, band0, band1, sums, lanes, boost,
+                  ? splat_band(frame, discs, layers, l, band0, band1, sums, lanes, boost, footprint,
                                [](double, float outer, std::ptrdiff_t dx, std::ptrdiff_t dy) {
                                  return coverage(outer, dx, dy);
                                })
-                  : splat_band(frame, discs, layers, l, band0, band1, sums, lanes, boost,
+                  : splat_band(frame, discs, layers, l, band0, band1, sums, lanes, boost, footprint,
                                [&footprint](double diameter, float outer, std::ptrdiff_t dx,
                                             std::ptrdiff_t dy) {
                                  return footprint.coverage(diameter, outer, dx, dy);
