@@ -838,9 +838,7 @@ SolveReport solve_in_place(const T* sub, const T* diag, const T* super, T* rhs_t
 // x[n-1] to x[0] instead. beta is the conductance of the link from i to i+1, >= 0 and finite
 // (checked: InvalidArgument naming the system and row otherwise); the matrix is then strictly
 // diagonally dominant and every method is safe. beta has the layout of rhs and x. Failing
-// systems, options.info and the floating-point state as in solve(). One long system (a batch
-// of one, at least kPartitionedMinRows rows, Auto or Thomas) runs by parts on all `threads`,
-// with 3n scalars of workspace for its expanded diagonals.
+// systems, options.info and the floating-point state as in solve().
 template <class T>
 SolveReport solve_diffusion(const real_t<T>* beta, const T* rhs, T* x, const BatchLayout& layout,
                             const SolveOptions& options = {}) {
