@@ -4,8 +4,6 @@
 #include <gtest/gtest.h>
 
 #include <complex>
-#include <random>
-#include <string>
 #include <vector>
 
 #include "reference.hpp"
@@ -362,91 +360,6 @@ TYPED_TEST(LongSystem, NonFiniteInputNamesItsRowAndKeepsRhs) {
         ASSERT_EQ(rhs[i], system.d[i]) << "row " << i;
       }
     }
-}
-
-// The diffusion form of one long system takes the parts too (its diagonals expanded, then
-// parts in lanes): against the long-double Thomas of those diagonals, in place and not, on 1
-// and 2 threads, with zero, small and large conductances; and the solution stays within the
-// right-hand side's range (the matrix is an M-matrix whose rows sum to 1: a maximum principle).
-TYPED_TEST(LongSystem, DiffusionFormByPartsMatchesTheReference) {
-  using T = TypeParam;
-  using R = real_t<T>;
-  for (std::ptrdiff_t n : long_sizes(detail::kPartLanes<T>)) {
-    std::mt19937_64 random(11 + n);
-    std::vector<R> beta(n);
-    System<T> s;
-    s.d.resize(n);
-    for (std::ptrdiff_t i = 0; i < n; ++i) {
-      const R kind = std::uniform_real_distribution<R>(0, 1)(random);
-      beta[i] = kind < 0.05 ? R(0) : kind > 0.95 ? R(1e3) : 50 * kind;
-      s.d[i] = random_scalar<T>(random, -1, 1);
-    }
-    for (std::ptrdiff_t i = 0; i < n; ++i) {
-      const R left = i > 0 ? beta[i - 1] : R(0), right = i + 1 < n ? beta[i] : R(0);
-      s.a.push_back(T(-left));
-      s.b.push_back(T(1 + left + right));
-      s.c.push_back(T(-right));
-    }
-    R low = std::numeric_limits<R>::max(), high = -low;  // per component, over the real parts
-    for (const T& v : s.d) {
-      low = std::min(low, std::real(v));
-      high = std::max(high, std::real(v));
-    }
-    for (int threads : {1, 2})
-      for (bool in_place : {false, true}) {
-        SCOPED_TRACE(::testing::Message() << "n = " << n << ", " << threads << " threads"
-                                          << (in_place ? ", in place" : ""));
-        SolveOptions options;
-        options.threads = threads;
-        std::vector<T> x = in_place ? s.d : std::vector<T>(n);
-        const SolveReport report = solve_diffusion(beta.data(), in_place ? x.data() : s.d.data(),
-                                                   x.data(), BatchLayout::single(n), options);
-        if (n >= detail::kPartitionedMinRows) {
-          EXPECT_GT(report.parts, 1);  // the parts path, not one scalar sweep
-        }
-        expect_accurate(s, x, Method::Thomas);
-        const R slack = 8 * std::numeric_limits<R>::epsilon();
-        for (std::ptrdiff_t i = 0; i < n; ++i)
-          ASSERT_TRUE(std::real(x[i]) >= low - slack && std::real(x[i]) <= high + slack)
-              << "row " << i << ": " << std::real(x[i]) << " outside [" << low << ", " << high
-              << "]";
-      }
-  }
-}
-
-// What the scalar diffusion path guarantees still holds on the parts path: a negative
-// conductance and a NaN right-hand side are named by row with rhs kept, and a right-hand side
-// near the largest float, whose elimination overflows though the solution does not, is solved.
-TEST(LongSystemDiffusion, ErrorsAndNearOverflowKeepTheScalarPathsAnswers) {
-  const std::ptrdiff_t n = detail::kPartitionedMinRows + 7, row = n / 3;
-  std::vector<float> beta(n, 1.f), rhs(n, 1.f);
-  for (const char* argument : {"beta", "rhs"}) {
-    SCOPED_TRACE(argument);
-    std::vector<float> b = beta, d = rhs;
-    if (std::string(argument) == "beta")
-      b[row] = -1.f;
-    else
-      d[row] = NAN;
-    const std::vector<float> before = d;
-    SolveOptions options;
-    options.threads = 2;
-    try {
-      solve_diffusion(b.data(), d.data(), d.data(), BatchLayout::single(n), options);
-      ADD_FAILURE() << "no error";
-    } catch (const InvalidArgument& error) {
-      EXPECT_EQ(error.argument(), argument);
-      EXPECT_EQ(error.row(), row);
-    }
-    for (std::ptrdiff_t i = 0; i < n; ++i) {
-      if (i == row) continue;
-      ASSERT_EQ(d[i], before[i]) << "row " << i;
-    }
-  }
-  std::vector<float> huge(n, 3e38f);  // x = 3e38 exactly solves it (rows sum to 1)
-  SolveOptions options;
-  options.threads = 2;
-  solve_diffusion(beta.data(), huge.data(), huge.data(), BatchLayout::single(n), options);
-  for (std::ptrdiff_t i = 0; i < n; ++i) ASSERT_NEAR(huge[i], 3e38f, 3e38f * 1e-5f) << "row " << i;
 }
 
 }  // namespace

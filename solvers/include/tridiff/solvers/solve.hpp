@@ -668,50 +668,6 @@ void solve_diffusion_one(Strided<const real_t<T>> beta, Strided<const T> d, Stri
   for (std::ptrdiff_t i = 0; i < n; ++i) x[i] = result[i];
 }
 
-// One long diffusion system (not periodic) by parts in SIMD lanes on `threads`, as solve_single
-// runs the general form: the three diagonals are expanded on the threads into 3n scalars of
-// workspace (the expansion the other methods use too), then partitioned_lanes solves them
-// unchecked (beta >= 0 makes the matrix strictly dominant). The scalar kernel runs at one row
-// per division latency on one thread; the parts, with the division chains side by side, are
-// bound by memory. Returns the number of parts, or 0 with x untouched when beta is not valid
-// (negative or not finite) or the elimination met a value that is not finite: the caller's
-// system path then names the row, or rescales an rhs near overflow.
-template <class T>
-std::ptrdiff_t solve_diffusion_partitioned(const real_t<T>* beta, const T* rhs, T* x,
-                                           const BatchLayout& layout, int threads) {
-  using R = real_t<T>;
-  const std::ptrdiff_t n = layout.n, o = layout.offset(0, 0);
-  const Strided<const R> links{beta + o, layout.row_stride};
-  static thread_local AlignedBuffer<T> diagonals;
-  diagonals.resize(3 * n);
-  T* const a = diagonals.data();  // on the team's threads `diagonals` names another buffer
-  T* const b = a + n;
-  T* const c = b + n;
-  std::ptrdiff_t invalid = 0;
-#pragma omp parallel num_threads(threads) if (threads > 1) reduction(+ : invalid)
-  {
-    const SubnormalsKept gradual_underflow;  // each thread has its own MXCSR
-#pragma omp for schedule(static)
-    for (std::ptrdiff_t i = 0; i < n; ++i) {
-      const R left = i > 0 ? links[i - 1] : R(0);
-      const R right = i + 1 < n ? links[i] : R(0);
-      invalid += !(right >= 0 && right <= std::numeric_limits<R>::max());
-      a[i] = T(-left);
-      b[i] = T(1 + left + right);
-      c[i] = T(-right);
-    }
-  }
-  std::ptrdiff_t parts = 0;
-  if (invalid == 0) {
-    const SystemView<T> view{{a, 1}, {b, 1}, {c, 1}, {rhs + o, layout.row_stride}, n, false};
-    if (partitioned_lanes(view, Strided<T>{x + o, layout.row_stride}, threads, false) ==
-        PartOutcome::Solved)
-      parts = make_part_layout<T, kPartLanes<T>>(n, threads).parts;
-  }
-  if (diagonals.size() * std::ptrdiff_t(sizeof(T)) > (std::ptrdiff_t(256) << 20)) diagonals = {};
-  return parts;
-}
-
 // The three diagonals of the diffusion system (seed 000 eq. 3.10).
 template <class R, class T>
 void expand_diffusion(Strided<const R> beta, std::ptrdiff_t n, bool periodic, T* a, T* b, T* c) {
@@ -858,12 +814,6 @@ SolveReport solve_diffusion(const real_t<T>* beta, const T* rhs, T* x, const Bat
   const bool lanes = fast == Method::Thomas && !options.periodic;
   const std::ptrdiff_t n = layout.n;
   BatchStatus status(options.info, layout);
-
-  if (layout.systems() == 1 && lanes && n >= kPartitionedMinRows) {
-    const SubnormalsKept gradual_underflow;  // see subnormals.hpp
-    const std::ptrdiff_t parts = solve_diffusion_partitioned(beta, rhs, x, layout, threads);
-    if (parts > 0) return {fast, 0, static_cast<int>(parts), 0};
-  }
 
   auto solve_chunk = [&](std::ptrdiff_t first, std::ptrdiff_t systems, Scratch<T>& scratch) {
     const SubnormalsKept gradual_underflow;  // see subnormals.hpp
