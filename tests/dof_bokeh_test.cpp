@@ -366,7 +366,7 @@ TEST(DofBokeh, OverflowingGainIsRefused) {
   EXPECT_NO_THROW(run("bokeh", f.color, f.coc, settings));
 }
 
-// Splats that would take days (64 x 64 pixels of CoC 10^4 px: 3e11 weights) are refused at
+// Splats that would take too long (64 x 64 pixels of CoC 10^4 px: 3.2e11 weights) are refused at
 // once, the largest CoC and its pixel named; bokeh splats only its highlights, so the same CoC
 // over a dim frame with one light runs.
 TEST(DofBokeh, SplatsThatWouldNotEndAreRefused) {

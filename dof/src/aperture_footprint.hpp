@@ -113,14 +113,14 @@ struct HighlightBoost {
 };
 
 // The splat methods' guard against a run that would not end. A splat of CoC diameter D px
-// evaluates about pi (D/2 + 1/2)^2 weights (its footprint's support), so a frame's cost grows
-// with the square of its CoC: a 128 x 72 frame whose CoC reaches 4000 px took `scatter` 14 s
-// (5.4e9 weights, 2.5 ns each on two cores), and the same CoC over 1920 x 1080 would take
-// days. Splats adding up to more than kMaxSplatWeights (some minutes of splatting on two cores;
-// a 3840 x 2160 frame at the lens's default clamp of 64 px is 2.8e10) are refused with an
-// error naming the largest CoC and its pixel, instead of running for hours; the CoC is not
-// clamped silently.
-inline constexpr double kMaxSplatWeights = 1e11;
+// evaluates about pi (D/2 + 1/2)^2 weights (its footprint's support; a kernel image's is up to
+// twice that), so a frame's cost grows with the square of its CoC: a 128 x 72 frame whose CoC
+// reaches 4000 px took `scatter` 14 s (5.4e9 weights, 2.5 ns each on two cores); 1920 x 1080
+// at that CoC everywhere would take about 18 hours. Splats adding up to more than
+// kMaxSplatWeights (about ten minutes on two cores; 7680 x 4320 at the lens's default clamp
+// of 64 px is 1.1e11) are refused with an error naming the largest CoC and its pixel, instead
+// of running for hours; the CoC is not clamped silently.
+inline constexpr double kMaxSplatWeights = 2.5e11;
 
 class SplatWork {
  public:
