@@ -169,8 +169,7 @@ void HighlightBoost::require_finite(float largest, std::ptrdiff_t x, std::ptrdif
 }
 
 void SplatWork::add(float coc, std::ptrdiff_t x, std::ptrdiff_t y) {
-  const double radius = 0.5 * std::fabs(double(coc)) + 0.5;
-  weights_ += std::numbers::pi * radius * radius;
+  weights_ += splat_weights(coc);
   ++count_;
   if (std::fabs(coc) > largest_) {
     largest_ = std::fabs(coc);

@@ -22,6 +22,7 @@
 #include <cmath>
 #include <cstddef>
 #include <memory>
+#include <numbers>
 #include <string>
 #include <vector>
 
@@ -122,6 +123,12 @@ struct HighlightBoost {
 // of running for hours; the CoC is not clamped silently.
 inline constexpr double kMaxSplatWeights = 2.5e11;
 
+// The weights a splat of signed CoC `coc` evaluates, about: pi (|coc|/2 + 1/2)^2.
+inline double splat_weights(float coc) {
+  const double radius = 0.5 * std::fabs(double(coc)) + 0.5;
+  return std::numbers::pi * radius * radius;
+}
+
 class SplatWork {
  public:
   // Counts the splat of pixel (x, y), signed CoC `coc`.
@@ -129,7 +136,6 @@ class SplatWork {
   // InvalidArgument naming "coc" when the splats counted exceed kMaxSplatWeights; `splats`
   // says what they are ("the scatter reference's splats"), `remedy` what to do instead.
   void require_within_budget(const std::string& splats, const std::string& remedy) const;
-  double weights() const { return weights_; }
 
  private:
   double weights_ = 0;

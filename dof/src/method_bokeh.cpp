@@ -28,9 +28,9 @@
 //
 // Cost: O(pixels) for the body (adi's, skipping the tiles in focus) plus O(highlights x CoC^2)
 // for the sprites; sprites adding up to more than kMaxSplatWeights are refused (SplatWork,
-// aperture_footprint.hpp), naming the largest CoC. Parallel: each thread owns a band of output rows and adds, in raster order of
-// the highlights, the part of every sprite that falls in it: the result does not depend on the
-// number of threads.
+// aperture_footprint.hpp), naming the largest CoC. Parallel: each thread owns a band of output
+// rows and adds, in raster order of the highlights, the part of every sprite that falls in it:
+// the result does not depend on the number of threads.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -86,10 +86,12 @@ Sprites find_highlights(const DofFrame& frame, const HighlightBoost& boost,
       if (!focus.is_sharp(coc(x, y)) && largest_channel(color, x, y) > boost.threshold)
         row_hits[std::size_t(y)].push_back(std::int32_t(x));
   Sprites sprites;
+  dof_detail::SplatWork work;
   const int channels = frame.channels();
   for (std::ptrdiff_t y = 0; y < frame.height(); ++y)
     for (const std::int32_t x : row_hits[std::size_t(y)]) {
       Highlight light{.x = x, .y = std::int32_t(y), .coc = coc(x, y)};
+      work.add(light.coc, x, y);
       light.excess = sprites.excess.size();
       const float m = largest_channel(color, x, y);
       boost.require_finite(m, x, y);
@@ -97,8 +99,6 @@ Sprites find_highlights(const DofFrame& frame, const HighlightBoost& boost,
       for (int c = 0; c < channels; ++c) sprites.excess.push_back(color(x, y, c) * share);
       sprites.lights.push_back(light);
     }
-  dof_detail::SplatWork work;
-  for (const Highlight& light : sprites.lights) work.add(light.coc, light.x, light.y);
   work.require_within_budget("the highlights' sprites",
                              "lower the CoC, raise highlight_threshold, or use adi");
   const std::ptrdiff_t count = std::ptrdiff_t(sprites.lights.size());

@@ -109,12 +109,6 @@ inline double coverage(double outer, std::ptrdiff_t dx, std::ptrdiff_t dy) {
   return std::min(1.0, outer - std::sqrt(double(dx * dx + dy * dy)));
 }
 
-// The half-width of row dy of the disc (a bound; coverage() decides).
-inline std::ptrdiff_t row_half_width(double outer, std::ptrdiff_t dy) {
-  const double s = outer * outer - double(dy * dy);
-  return s > 0 ? static_cast<std::ptrdiff_t>(std::floor(std::sqrt(s))) : -1;
-}
-
 Disc make_disc(float coc, FocusTest focus) {
   Disc disc;
   const double diameter = std::fabs(double(coc));
@@ -125,7 +119,7 @@ Disc make_disc(float coc, FocusTest focus) {
   // (two half-axes each), the rest four times.
   double sum = 0;
   for (std::ptrdiff_t dy = 0; dy <= disc.reach; ++dy) {
-    const std::ptrdiff_t hx = row_half_width(disc.outer, dy);
+    const std::ptrdiff_t hx = dof_detail::footprint_row_half_width(disc.outer, dy);
     for (std::ptrdiff_t dx = 0; dx <= hx; ++dx) {
       const double c = coverage(disc.outer, dx, dy);
       if (c > 0) sum += c * ((dx == 0 ? 1 : 2) * (dy == 0 ? 1 : 2));
@@ -178,9 +172,10 @@ void refuse_what_takes_too_long(const DofFrame& frame) {
                                            ") has |CoC| " + std::to_string(std::fabs(coc(x, y))) +
                                            " px; the scatter reference takes at most " +
                                            std::to_string(int(kMaxDiameter)) + " px");
-  dof_detail::SplatWork largest;  // every pixel at the largest CoC: the bound mostly suffices
-  largest.add(frame.max_abs_coc(), 0, 0);
-  if (largest.weights() * double(frame.width() * frame.height()) > dof_detail::kMaxSplatWeights) {
+  // Every pixel at the largest CoC: a bound that mostly settles it without a pass.
+  const double bound =
+      dof_detail::splat_weights(frame.max_abs_coc()) * double(frame.width() * frame.height());
+  if (bound > dof_detail::kMaxSplatWeights) {
     const FocusTest focus = frame.focus();
     dof_detail::SplatWork work;
     for (std::ptrdiff_t y = 0; y < coc.height(); ++y)
@@ -380,7 +375,7 @@ Box splat_band(const DofFrame& frame, const std::vector<Disc>& discs, const Dept
     for (std::ptrdiff_t dy = -reach; dy <= reach; ++dy) {
       const std::ptrdiff_t ty = fold(qy + dy, height);
       if (ty < band0 || ty >= band1) continue;
-      const std::ptrdiff_t hx = row_half_width(disc.outer, dy);
+      const std::ptrdiff_t hx = dof_detail::footprint_row_half_width(disc.outer, dy);
       if (hx < 0) continue;
       const bool inside = qx - hx >= 0 && qx + hx < width;
       double* cover_row = cover + sums.at(0, ty);
