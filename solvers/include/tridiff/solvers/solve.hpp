@@ -23,6 +23,7 @@
 #include "tridiff/solvers/detail/checks.hpp"
 #include "tridiff/solvers/detail/cyclic_reduction.hpp"
 #include "tridiff/solvers/detail/diffusion_form.hpp"
+#include "tridiff/solvers/detail/partitioned_diffusion.hpp"
 #include "tridiff/solvers/detail/partitioned_lanes.hpp"
 #include "tridiff/solvers/detail/periodic.hpp"
 #include "tridiff/solvers/detail/pivoting.hpp"
@@ -814,6 +815,21 @@ SolveReport solve_diffusion(const real_t<T>* beta, const T* rhs, T* x, const Bat
   const bool lanes = fast == Method::Thomas && !options.periodic;
   const std::ptrdiff_t n = layout.n;
   BatchStatus status(options.info, layout);
+
+  // One long system: by parts in lanes, on every thread (detail/partitioned_diffusion.hpp).
+  // Bad input and an overflowing rhs go on to the scalar kernel, which names the row or
+  // rescales.
+  if constexpr (!is_complex_v<T>) {
+    if (lanes && layout.systems() == 1 && n >= kPartitionedMinRows) {
+      const SubnormalsKept gradual_underflow;  // see subnormals.hpp
+      const std::ptrdiff_t o = layout.offset(0, 0);
+      const std::ptrdiff_t parts =
+          partitioned_diffusion(Strided<const R>{beta + o, layout.row_stride},
+                                Strided<const T>{rhs + o, layout.row_stride}, n,
+                                Strided<T>{x + o, layout.row_stride}, threads);
+      if (parts > 0) return {fast, 0, static_cast<int>(parts), 0};
+    }
+  }
 
   auto solve_chunk = [&](std::ptrdiff_t first, std::ptrdiff_t systems, Scratch<T>& scratch) {
     const SubnormalsKept gradual_underflow;  // see subnormals.hpp
