@@ -9,6 +9,7 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <type_traits>
 #include <vector>
 
 #include "tridiff/solvers/solve.hpp"
@@ -39,6 +40,31 @@ std::vector<long double> long_double_diffusion(const std::vector<T>& beta,
     x[i] = (W(d[i]) + link(i - 1) * x[i - 1]) / pivot;
   }
   for (std::ptrdiff_t i = n - 2; i >= 0; --i) x[i] -= upper[i] * x[i + 1];
+  return x;
+}
+
+// The same system by the diffusion kernel's subtraction-free elimination (diffusion_form.hpp),
+// in long double: the reference for conductances beyond 2^64, where the textbook elimination
+// above loses the 1 of 1 + beta + beta' even in long double. Independent of the parts and lanes
+// (one sweep, 64-bit mantissa, the exponent range of 1e4932).
+template <class T>
+std::vector<long double> long_double_diffusion_without_subtractions(const std::vector<T>& beta,
+                                                                    const std::vector<T>& d) {
+  using W = long double;
+  const std::ptrdiff_t n = std::ptrdiff_t(d.size());
+  std::vector<W> multiplier(n), x(n);
+  W beta_before = 0, e_before = 1, carry = 0;
+  for (std::ptrdiff_t i = 0; i < n; ++i) {
+    const W beta_here = i + 1 < n ? W(beta[i]) : W(0);
+    const W g = 1 + beta_before * e_before;
+    const W pivot = g + beta_here;
+    carry = (W(d[i]) + beta_before * carry) / pivot;
+    x[i] = carry;
+    multiplier[i] = beta_here / pivot;
+    e_before = g / pivot;
+    beta_before = beta_here;
+  }
+  for (std::ptrdiff_t i = n - 2; i >= 0; --i) x[i] += multiplier[i] * x[i + 1];
   return x;
 }
 
@@ -176,6 +202,43 @@ TYPED_TEST(LongDiffusion, StridedAndInPlaceSolvesMatch) {
                 .parts,
             1);
   EXPECT_LE(relative_error(in_place, reference, d), error_bound<T>());
+}
+
+// Conductances near the top of the range: the parts' decaying values (the responses to a
+// separator, the products of multipliers) must not be dropped where a huge link multiplies
+// them again. Two patterns: "glue", every link 0.5 or huge (one in ten), and huge links on
+// both sides of every separator with 1e6 inside the parts. Then links above max() / 2 on both
+// sides of a part's first row, whose diagonal overflows: the path must notice and hand the
+// system to the scalar kernel.
+TYPED_TEST(LongDiffusion, HugeConductancesStayAccurate) {
+  using T = TypeParam;
+  constexpr int W = detail::kPartLanes<T>;
+  const std::ptrdiff_t n = 100003;
+  const T huge = std::is_same_v<T, float> ? T(1e30) : T(1e300);
+  std::mt19937_64 random(8);
+  std::uniform_real_distribution<double> signed_unit(-1, 1);
+  std::vector<T> d(n);
+  for (auto& v : d) v = T(signed_unit(random));
+  for (int threads : {1, 2}) {
+    const std::ptrdiff_t rows = detail::make_part_layout<T, W>(n, threads).rows;
+    std::vector<T> glue(n), separated(n, T(1e6)), overflowing(n, T(1));
+    for (auto& b : glue) b = random() % 10 == 0 ? huge : T(0.5);
+    for (std::ptrdiff_t i = rows - 1; i < n; i += rows) {
+      separated[i - 1] = separated[i] = huge;
+      separated[i - 2] = huge;
+    }
+    overflowing[3 * rows - 1] = overflowing[3 * rows] = std::numeric_limits<T>::max() * T(0.6);
+    for (const auto* beta : {&glue, &separated, &overflowing}) {
+      SCOPED_TRACE(::testing::Message() << (beta == &glue        ? "glue"
+                                            : beta == &separated ? "separators"
+                                                                 : "overflowing")
+                                        << ", " << threads << " threads");
+      std::vector<T> x(n);
+      solve_long(*beta, d, x, threads);
+      EXPECT_LE(relative_error(x, long_double_diffusion_without_subtractions(*beta, d), d),
+                error_bound<T>());
+    }
+  }
 }
 
 // Bad input on the path: the error names the argument and the row, as for short systems, and a

@@ -117,14 +117,16 @@ DiffusionPartGroup<T, W> diffusion_part_group(Strided<const T> beta, Strided<con
 }
 
 // L and the product of the multipliers, both in [0, 1], decay geometrically along a part where
-// beta is small, and as subnormals every operation on them would cost a microcode assist.
-// Below min() / epsilon (2^-103 in float, 2^-970 in double) they are set to 0: they enter the
-// results multiplied by the rhs (against which the change is below min()) or by a beta, where
-// it stays below epsilon relative to the separator's diagonal >= 1 for any beta < 2^80 (float).
+// beta is small, and as subnormals every operation on them would cost a microcode assist. So
+// they are set to 0 once negligible: once value * weight < min() / epsilon (2^-103 in float,
+// 2^-970 in double), where `weight` >= 1 bounds the conductance that multiplies the value
+// later (the product ends up multiplied by the link into the part, beta_left; L at row j by
+// beta_j, the link it crosses next). The change is then below min() against the rhs and
+// below epsilon against the separator's diagonal (>= 1), whatever the size of beta.
 template <class T>
-inline T flush_negligible(T value) {
+inline T flush_negligible(T value, T weight) {
   constexpr T kNegligible = std::numeric_limits<T>::min() / std::numeric_limits<T>::epsilon();
-  return value < kNegligible ? T(0) : value;
+  return value * std::max(T(1), weight) < kNegligible ? T(0) : value;
 }
 
 // Step 1 on one group (see the header): fills the group's entries of `ends`. `block` holds
@@ -164,13 +166,15 @@ bool reduce_diffusion_group(const DiffusionPartGroup<T, W>& group, std::ptrdiff_
         const T inverse = 1 / (g + beta_here);
         y_u[l] = (rhs[l] + beta_before[l] * y_u[l]) * inverse;
         y_w[l] = (1 + beta_before[l] * y_w[l]) * inverse;
-        y_l[l] = flush_negligible(beta_before[l] * y_l[l] * inverse);
+        y_l[l] = flush_negligible(beta_before[l] * y_l[l] * inverse, beta_here);
         u_first[l] += product[l] * y_u[l];
         w_first[l] += product[l] * y_w[l];
-        product[l] = flush_negligible(product[l] * beta_here * inverse);  // times f_j
+        product[l] = flush_negligible(product[l] * beta_here * inverse, group.beta_left[l]);
         e_before[l] = g * inverse;
         beta_before[l] = beta_here;
-        probe[l] += zero_if_finite(beta_here) + zero_if_finite(rhs[l]) + T(beta_here < 0);
+        // The pivot g + beta_here overflows only for beta above max() / 2; its inverse would
+        // then be a silent 0.
+        probe[l] += zero_if_finite(g + beta_here) + zero_if_finite(rhs[l]) + T(beta_here < 0);
       }
     }
     if (interior >= j0 && interior < j0 + count)
@@ -217,7 +221,9 @@ bool solve_separators(std::ptrdiff_t parts, const DiffusionPartEnds<T>& ends, T*
     const T link_down = down * r_after;
     const T rhs = ends.separator_d[k] + up * ends.u_last[k] + down * u_after;
     const T g = leak + link_up * e_before;
-    const T inverse = 1 / (g + link_down);
+    const T pivot = g + link_down;
+    const T inverse = 1 / pivot;
+    probe += zero_if_finite(pivot);
     y_before = (rhs + link_up * y_before) * inverse;
     x[k] = y_before;
     multiplier[k] = link_down * inverse;
