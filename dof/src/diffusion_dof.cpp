@@ -95,13 +95,12 @@ void for_each_row(std::ptrdiff_t height, int threads, Row&& row) {
 // built-in scene at 1920 x 1080 on a 2-core VM took 268-584 ms, now typically 56).
 void layered_dof(Image& out, const DofFrame& frame, const NearLayer& near,
                  const DofOptions& settings, DofReport& report, const Diffuser& diffuse,
-                 const DiffusionOptions& options) {
+                 const CocConductance& conductance, const DiffusionOptions& options) {
   const Image& color = frame.color();
   const ConstPlane coc = frame.coc();
   const std::ptrdiff_t width = color.width(), height = color.height();
   const int channels = color.channels(), threads = settings.threads;
   const float fill_beta = adi_beta_for_coc(frame.max_abs_coc());
-  const float in_focus = settings.in_focus_coc_px;
   DiffusionReport diffusion;  // of the two blurs (the fills solve what the near layer reaches)
   Image reach;
   timed(report, "near split",
@@ -144,7 +143,7 @@ void layered_dof(Image& out, const DofFrame& frame, const NearLayer& near,
     });
   });
   timed(report, "background blur", [&] {
-    diffusion += diffuse(background, background, background_coc.plane(0), in_focus, options);
+    diffusion += diffuse(background, background, background_coc.plane(0), conductance, options);
   });
 
   // Near field: premultiplied colour and coverage, spreading out with its own CoC, which is
@@ -179,7 +178,7 @@ void layered_dof(Image& out, const DofFrame& frame, const NearLayer& near,
         value[x] =
             inside[x] > 0 ? filled(in_near_field(k[x]), std::abs(k[x]), value[x], weight[x]) : 0.f;
     });
-    diffusion += diffuse(near_layer, near_layer, near_coc.plane(0), in_focus, options);
+    diffusion += diffuse(near_layer, near_layer, near_coc.plane(0), conductance, options);
   });
 
   // Composited into the background's buffer, which then becomes `out` (a fresh buffer for
@@ -204,8 +203,7 @@ void layered_dof(Image& out, const DofFrame& frame, const NearLayer& near,
 
 // Every pixel's conductance must be finite: a finite CoC above about 1.8e19 px has none. The
 // largest |CoC| decides (the conductance grows with it); the slow path names the first pixel.
-void require_finite_conductance(const DofFrame& frame, float in_focus_px) {
-  const CocConductance conductance{in_focus_px};
+void require_finite_conductance(const DofFrame& frame, const CocConductance& conductance) {
   if (std::isfinite(conductance(frame.max_abs_coc()))) return;
   const ConstPlane coc = frame.coc();
   for (std::ptrdiff_t y = 0; y < coc.height(); ++y)
@@ -221,13 +219,14 @@ void require_finite_conductance(const DofFrame& frame, float in_focus_px) {
 
 }  // namespace
 
-LinkField coc_links(ConstPlane coc, float in_focus_px, int threads) {
-  return links_from_pixels(coc, CocConductance{in_focus_px}, threads);
+LinkField coc_links(ConstPlane coc, const CocConductance& conductance, int threads) {
+  return links_from_pixels(coc, conductance, threads);
 }
 
 void diffusion_dof(Image& out, const DofFrame& frame, const DofOptions& settings, DofReport& report,
-                   const Diffuser& diffuse) {
-  require_finite_conductance(frame, settings.in_focus_coc_px);
+                   const Diffuser& diffuse, float spread) {
+  const CocConductance conductance{settings.in_focus_coc_px, spread};
+  require_finite_conductance(frame, conductance);
   DiffusionOptions options;
   options.threads = settings.threads;
   options.skip_inactive = settings.skip_in_focus;
@@ -236,13 +235,13 @@ void diffusion_dof(Image& out, const DofFrame& frame, const DofOptions& settings
     const NearLayer near =
         near_layer(frame.coc(), settings.in_focus_coc_px, resolve_threads(settings.threads));
     if (!near.empty) {
-      layered_dof(out, frame, near, settings, report, diffuse, options);
+      layered_dof(out, frame, near, settings, report, diffuse, conductance, options);
       return;
     }
   }
   DiffusionReport diffusion;
   timed(report, "diffusion", [&] {
-    diffusion = diffuse(out, frame.color(), frame.coc(), settings.in_focus_coc_px, options);
+    diffusion = diffuse(out, frame.color(), frame.coc(), conductance, options);
   });
   report.skipped_fraction = diffusion.skipped_fraction();
 }

@@ -12,27 +12,37 @@
 
 namespace tridiff::dof_detail {
 
-// The conductance of a pixel of CoC diameter |coc_px|: adi_beta_for_coc, or zero (the pixel
-// insulates itself) when it is sharp by FocusTest{in_focus_px}. Links take the smaller of their
-// two ends.
+// The conductance of a pixel of CoC diameter |coc_px|: `spread` times adi_beta_for_coc (the
+// beta whose blur has the disc's variance), or zero (the pixel insulates itself) when it is
+// sharp by FocusTest{in_focus_px}. Links take the smaller of their two ends.
 struct CocConductance {
   float in_focus_px;
+  float spread = 1.f;
   float operator()(float coc_px) const {
-    return FocusTest{in_focus_px}.is_sharp(coc_px) ? 0.f : adi_beta_for_coc(std::abs(coc_px));
+    return FocusTest{in_focus_px}.is_sharp(coc_px) ? 0.f
+                                                   : spread * adi_beta_for_coc(std::abs(coc_px));
   }
 };
 
-// A diffusion operator: dst = diffuse(src) with the conductances CocConductance{in_focus_px}
-// of the CoC plane `coc` (dst may be src). The frame is checked before (DofFrame), and so is
+// A diffusion operator: dst = diffuse(src) with the conductances `conductance` gives the CoC
+// plane `coc` (dst may be src). The frame is checked before (DofFrame), and so is
 // every pixel's conductance (diffusion_dof): what the operator refuses beyond that it must name
 // as the CoC's ("coc"), as a user who gave the CoC understands it.
-using Diffuser = std::function<DiffusionReport(Image& dst, const Image& src, ConstPlane coc,
-                                               float in_focus_px, const DiffusionOptions&)>;
+using Diffuser =
+    std::function<DiffusionReport(Image& dst, const Image& src, ConstPlane coc,
+                                  const CocConductance& conductance, const DiffusionOptions&)>;
 
-// The links of CocConductance{in_focus_px} as a LinkField (for the explicit methods).
-LinkField coc_links(ConstPlane coc, float in_focus_px, int threads);
+// The links of `conductance` as a LinkField (for the explicit methods).
+LinkField coc_links(ConstPlane coc, const CocConductance& conductance, int threads);
 
+// Depth of field by `diffuse`, with CocConductance{settings.in_focus_coc_px, spread}.
 void diffusion_dof(Image& out, const DofFrame& frame, const DofOptions& settings, DofReport& report,
-                   const Diffuser& diffuse);
+                   const Diffuser& diffuse, float spread = 1.f);
+
+// The `adi` method's diffusion (method_adi.cpp) with its conductances times `spread`; run_adi
+// is spread 1.
+void run_adi_spread(Image& out, const DofFrame& frame, const DofOptions& settings,
+                    DofReport& report, float spread);
+void run_adi(Image& out, const DofFrame& frame, const DofOptions& settings, DofReport& report);
 
 }  // namespace tridiff::dof_detail

@@ -9,12 +9,19 @@
 
 namespace tridiff::dof_detail {
 
+void run_adi_spread(Image& out, const DofFrame& frame, const DofOptions& settings,
+                    DofReport& report, float spread) {
+  diffusion_dof(
+      out, frame, settings, report,
+      [](Image& dst, const Image& src, ConstPlane coc, const CocConductance& conductance,
+         const DiffusionOptions& options) {
+        return diffuse_isotropic(dst, src, coc, conductance, options);
+      },
+      spread);
+}
+
 void run_adi(Image& out, const DofFrame& frame, const DofOptions& settings, DofReport& report) {
-  diffusion_dof(out, frame, settings, report,
-                [](Image& dst, const Image& src, ConstPlane coc, float in_focus_px,
-                   const DiffusionOptions& options) {
-                  return diffuse_isotropic(dst, src, coc, CocConductance{in_focus_px}, options);
-                });
+  run_adi_spread(out, frame, settings, report, 1.f);
 }
 
 }  // namespace tridiff::dof_detail

@@ -31,9 +31,9 @@ void require_steppable(const LinkField& beta, const DiffusionOptions& options) {
 void run_mpad(Image& out, const DofFrame& frame, const DofOptions& settings, DofReport& report) {
   int steps = 0;
   diffusion_dof(out, frame, settings, report,
-                [&steps](Image& dst, const Image& src, ConstPlane coc, float in_focus_px,
-                         const DiffusionOptions& options) {
-                  const LinkField beta = coc_links(coc, in_focus_px, options.threads);
+                [&steps](Image& dst, const Image& src, ConstPlane coc,
+                         const CocConductance& conductance, const DiffusionOptions& options) {
+                  const LinkField beta = coc_links(coc, conductance, options.threads);
                   require_steppable(beta, options);
                   int taken = 0;
                   DiffusionReport r = diffuse_explicit(dst, src, beta, options, &taken);
