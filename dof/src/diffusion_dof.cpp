@@ -240,9 +240,8 @@ void diffusion_dof(Image& out, const DofFrame& frame, const DofOptions& settings
     }
   }
   DiffusionReport diffusion;
-  timed(report, "diffusion", [&] {
-    diffusion = diffuse(out, frame.color(), frame.coc(), conductance, options);
-  });
+  timed(report, "diffusion",
+        [&] { diffusion = diffuse(out, frame.color(), frame.coc(), conductance, options); });
   report.skipped_fraction = diffusion.skipped_fraction();
 }
 
