@@ -12,6 +12,7 @@
 #include <cstring>
 #include <limits>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #if defined(__SSE__) || defined(_M_X64)
@@ -176,6 +177,60 @@ TYPED_TEST(HardMatrices, DiffusionWithRhsNearMaxIsSolvedWithoutOverflow) {
     ASSERT_NO_THROW(x = solve_one_system(s, using_method(method)));
     for (const T& v : x) EXPECT_NEAR(v / value, 1, 8 * n * std::numeric_limits<T>::epsilon());
   }
+}
+
+// Periodic diffusion at large beta. Sherman-Morrison on the expanded matrix lost the 1 of
+// 1 + beta + beta' (float: error 1.3e-3 and x up to 1.00036 for an rhs in [0, 1] at beta
+// 1e5); the ring cut at row 0 (periodic_diffusion_thomas) keeps a few epsilon. Checked against
+// Eigen's dense LU in long double (n <= 64) where that is exact enough (its error about
+// 4 beta * 1e-19), and everywhere against two invariants: the maximum principle, and the sum of x equal to the sum
+// of the rhs (every column of the periodic matrix sums to 1).
+TYPED_TEST(HardMatrices, PeriodicDiffusionKeepsItsDigitsAtLargeBeta) {
+  using T = TypeParam;
+  constexpr T eps = std::numeric_limits<T>::epsilon();
+  const std::vector<double> scales = std::is_same_v<T, float>
+                                         ? std::vector<double>{1, 1e3, 1e5, 1e7}
+                                         : std::vector<double>{1, 1e3, 1e6, 1e12};
+  const double referenced_up_to = std::is_same_v<T, float> ? 1e7 : 1e3;
+  for (std::ptrdiff_t n : {1, 2, 3, 64, 4097})
+    for (double largest : scales) {
+      SCOPED_TRACE(::testing::Message() << "n " << n << ", beta up to " << largest);
+      std::vector<T> beta(n), d(n), x(n);
+      for (std::ptrdiff_t i = 0; i < n; ++i) {
+        beta[i] = T(largest * (0.5 + 0.5 * std::sin(0.37 * double(i))));
+        d[i] = T((i / 7) % 2);
+      }
+      if (n > 1) d[1] = T(1);  // not all zero for the small sizes
+      SolveOptions options;
+      options.periodic = true;
+      solve_diffusion(beta.data(), d.data(), x.data(), BatchLayout::single(n), options);
+      long double sum_x = 0, sum_d = 0;
+      for (std::ptrdiff_t i = 0; i < n; ++i) {
+        EXPECT_GE(x[i], T(0)) << "row " << i;
+        EXPECT_LE(x[i], T(1) + 4 * eps) << "row " << i;
+        sum_x += x[i];
+        sum_d += d[i];
+      }
+      EXPECT_NEAR(double(sum_x), double(sum_d), 16 * double(eps) * double(n));
+      if (largest > referenced_up_to || n > 64) continue;
+      // The matrix in long double (in T, 1 + beta + beta' would already have lost the 1).
+      using Wide = long double;
+      Eigen::Matrix<Wide, Eigen::Dynamic, Eigen::Dynamic> matrix =
+          Eigen::Matrix<Wide, Eigen::Dynamic, Eigen::Dynamic>::Zero(n, n);
+      Eigen::Matrix<Wide, Eigen::Dynamic, 1> rhs(n);
+      for (std::ptrdiff_t i = 0; i < n; ++i) {  // duplicates add up, as n = 1 and 2 need
+        const std::ptrdiff_t before = (i + n - 1) % n, after = (i + 1) % n;
+        matrix(i, i) += 1 + Wide(beta[before]) + Wide(beta[i]);
+        matrix(i, before) -= Wide(beta[before]);
+        matrix(i, after) -= Wide(beta[i]);
+        rhs[i] = d[i];
+      }
+      const Eigen::Matrix<Wide, Eigen::Dynamic, 1> reference = matrix.partialPivLu().solve(rhs);
+      long double error = 0;
+      for (std::ptrdiff_t i = 0; i < n; ++i)
+        error = std::max(error, std::fabs((long double)x[i] - reference[i]));
+      EXPECT_LE(double(error), 64 * double(eps));
+    }
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -646,20 +646,25 @@ void require_valid_beta(Strided<const R> beta, std::ptrdiff_t n, bool periodic,
   }
 }
 
-// One diffusion system by the scalar kernel, into x only if the solution is finite. With rhs
-// near max() the forward sweep's d[i] + beta x[i-1] can overflow where x, a convex combination
-// of rhs, cannot: the system is then solved again with rhs scaled down.
+// One diffusion system by the scalar kernel (periodic_diffusion_thomas if `periodic`), into x
+// only if the solution is finite. With rhs near max() the forward sweep's d[i] + beta x[i-1]
+// can overflow where x, a convex combination of rhs, cannot: the system is then solved again
+// with rhs scaled down.
 template <class T>
 void solve_diffusion_one(Strided<const real_t<T>> beta, Strided<const T> d, Strided<T> x,
-                         std::ptrdiff_t n, Scratch<T>& scratch, std::ptrdiff_t system) {
+                         std::ptrdiff_t n, Scratch<T>& scratch, std::ptrdiff_t system,
+                         bool periodic = false) {
   for (std::ptrdiff_t i = 0; i < n; ++i)
     if (!is_finite(d[i])) throw InvalidArgument("rhs", system, i, "is not finite");
-  scratch.real_work.resize(n);
+  scratch.real_work.resize(3 * n);
   scratch.work.resize(2 * n);
   T* result = scratch.work.data();
   const std::ptrdiff_t bad = solve_rescaling_on_overflow(
       n, d, result, result + n, [&](Strided<const T> rhs, T* out) -> std::ptrdiff_t {
-        diffusion_thomas(n, beta, rhs, Strided<T>{out, 1}, scratch.real_work.data());
+        if (periodic)
+          periodic_diffusion_thomas(n, beta, rhs, Strided<T>{out, 1}, scratch.real_work.data());
+        else
+          diffusion_thomas(n, beta, rhs, Strided<T>{out, 1}, scratch.real_work.data());
         return -1;
       });
   static_cast<void>(bad);  // the diffusion matrix has no vanishing pivot (every pivot >= 1)
@@ -846,6 +851,10 @@ SolveReport solve_diffusion(const real_t<T>* beta, const T* rhs, T* x, const Bat
         require_valid_beta(b, n, options.periodic, s);
         if (lanes) {  // a system on its own, or the lanes broke down: the scalar kernel
           solve_diffusion_one(b, d, out, n, scratch, s);
+          return;
+        }
+        if (fast == Method::Thomas) {  // periodic: the ring cut at row 0, no subtraction
+          solve_diffusion_one(b, d, out, n, scratch, s, true);
           return;
         }
         // Other methods, and periodic systems: expand to three diagonals.

@@ -36,6 +36,55 @@ void diffusion_thomas(std::ptrdiff_t n, Strided<const real_t<T>> beta, Strided<c
   for (std::ptrdiff_t i = n - 2; i >= 0; --i) x[i] += work[i] * x[i + 1];
 }
 
+// The periodic system (beta[n-1] links x[n-1] to x[0]), as subtraction-free as the open one:
+// the ring is cut at row 0. Rows 1 .. n-1 form an open chain whose ends couple to x_0 (through
+// beta[0] at row 1 and beta[n-1] at row n-1), so by linearity x_i = u_i + v_i x_0, with u the
+// chain's solution for d and v its response to x_0. The chain's rows sum to 1 apart from those
+// two links, so its response to all ones, w, satisfies w + v = 1: row 0 then reads
+//   (1 + beta[n-1] w_{n-1} + beta[0] w_1) x_0 = d_0 + beta[n-1] u_{n-1} + beta[0] u_1,
+// every term >= 0 (the textbook route, Sherman-Morrison on the expanded matrix, subtracts, and
+// its error grows like beta * epsilon). x is again a convex combination of d. x may alias d;
+// `work` holds 3n reals.
+template <class T>
+void periodic_diffusion_thomas(std::ptrdiff_t n, Strided<const real_t<T>> beta, Strided<const T> d,
+                               Strided<T> x, real_t<T>* work) {
+  using R = real_t<T>;
+  if (n == 1) {  // the row's links join x_0 to itself: the matrix is 1
+    x[0] = d[0];
+    return;
+  }
+  R* const multiplier = work;  // row i: x_i = y_i + multiplier_i x_{i+1} (i < n-1)
+  R* const w = work + n;       // the chain's response to all ones
+  R* const v = work + 2 * n;   // and to x_0
+  const T d0 = d[0];           // x may be d: row 0 is overwritten last, but read it first
+  R beta_before = beta[0], e_before = 1, carry_w = 0, carry_v = 1;
+  T carry_u = T(0);
+  for (std::ptrdiff_t i = 1; i < n; ++i) {
+    const R beta_here = beta[i];  // for i = n-1 the link back to x_0
+    const R g = 1 + beta_before * e_before;
+    const R inverse = 1 / (g + beta_here);
+    carry_u = (d[i] + beta_before * carry_u) * inverse;
+    carry_w = (1 + beta_before * carry_w) * inverse;
+    carry_v = beta_before * carry_v * inverse;
+    x[i] = carry_u;
+    w[i] = carry_w;
+    v[i] = carry_v;
+    multiplier[i] = beta_here * inverse;
+    e_before = g * inverse;
+    beta_before = beta_here;
+  }
+  v[n - 1] += multiplier[n - 1];  // the last row's own link to x_0
+  for (std::ptrdiff_t i = n - 2; i >= 1; --i) {
+    x[i] += multiplier[i] * x[i + 1];
+    w[i] += multiplier[i] * w[i + 1];
+    v[i] += multiplier[i] * v[i + 1];
+  }
+  const R up = beta[n - 1], down = beta[0];
+  const T x0 = (d0 + up * x[n - 1] + down * x[1]) / (1 + up * w[n - 1] + down * w[1]);
+  x[0] = x0;
+  for (std::ptrdiff_t i = 1; i < n; ++i) x[i] += v[i] * x0;
+}
+
 // Reals of workspace DiffusionLanes<T, W, rhs> needs.
 template <class T>
 constexpr std::ptrdiff_t diffusion_lanes_workspace(std::ptrdiff_t n, int lanes, int rhs = 1) {
