@@ -3,6 +3,7 @@
 // inside() test and the polygon's area formula; energies against the input's, by hand.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -319,7 +320,8 @@ TEST(DofBokeh, WithoutHighlightsTheShapeChangesNoBit) {
 
 // A texture with the power spectrum of natural images, 1/f^2 (the same energy in every octave
 // of spatial frequency): value noise, bilinearly interpolated, one layer per octave of equal
-// amplitude, spacings 128 down to 2 px. Values about in [0, 1].
+// amplitude, spacings 128 down to 2 px; clamped to [0, 0.99], below the automatic highlight
+// threshold (1), so that bokeh is its body alone.
 Image natural_texture(std::ptrdiff_t n, unsigned seed) {
   std::mt19937 random(seed);
   std::uniform_real_distribution<double> unit(-1, 1);
@@ -342,7 +344,8 @@ Image natural_texture(std::ptrdiff_t n, unsigned seed) {
       }
   }
   return testing_util::make_image(n, n, 1, [&](auto x, auto y, int) {
-    return float(0.5 + 0.5 * sum[std::size_t(y * n + x)] / std::sqrt(double(octaves)));
+    return float(std::clamp(0.5 + 0.5 * sum[std::size_t(y * n + x)] / std::sqrt(double(octaves)),
+                            0.0, 0.99));
   });
 }
 

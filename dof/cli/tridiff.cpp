@@ -34,8 +34,9 @@ constexpr const char* kUsageHead =
 
 )";
 constexpr const char* kDofUsage = R"(method
-  --method NAME             bokeh (default: adi for the body, out-of-focus highlights as
-                            aperture-shaped sprites); every method: `tridiff methods`; `auto`
+  --method NAME             bokeh (default: adi's diffusion for the body, out-of-focus
+                            highlights as aperture-shaped sprites); every method: `tridiff
+                            methods`; `auto`
                             picks the cheapest whose measured error meets --psnr-budget
   --psnr-budget DB          auto: the least PSNR against the table's references: the thin-lens
                             truth of the ray-traced scenes, scatter on the others (default 30)

@@ -139,7 +139,8 @@ constexpr std::array kMethods{
          .in_place = false}),
     method<dof_detail::run_bokeh>(
         {.name = "bokeh",
-         .summary = "adi for the body, out-of-focus highlights as shaped sprites (issue 26)",
+         .summary = "adi's diffusion (1.25x its conductance) for the body, out-of-focus highlights "
+                    "as shaped sprites (issue 26)",
          .blurs_foreground = false,
          .unbounded_blur = false,
          .cost = "O(pixels) + O(highlights x CoC^2)",

@@ -857,7 +857,7 @@ SolveReport solve_diffusion(const real_t<T>* beta, const T* rhs, T* x, const Bat
           solve_diffusion_one(b, d, out, n, scratch, s, true);
           return;
         }
-        // Other methods, and periodic systems: expand to three diagonals.
+        // Other methods: expand to three diagonals.
         scratch.slab.resize(3 * n);
         T* a = scratch.slab.data();
         T* diag = a + n;

@@ -10,6 +10,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <type_traits>
 
@@ -62,7 +63,10 @@ void periodic_diffusion_thomas(std::ptrdiff_t n, Strided<const real_t<T>> beta, 
   for (std::ptrdiff_t i = 1; i < n; ++i) {
     const R beta_here = beta[i];  // for i = n-1 the link back to x_0
     const R g = 1 + beta_before * e_before;
-    const R inverse = 1 / (g + beta_here);
+    // g carries the link to x_0 at full size (g = 1 + beta[0] at row 1), so with two links
+    // above max() / 2 the pivot overflows: its inverse is then taken in halves, not as 0.
+    const R pivot = g + beta_here;
+    const R inverse = std::isfinite(pivot) ? 1 / pivot : R(0.5) / (R(0.5) * g + R(0.5) * beta_here);
     carry_u = (d[i] + beta_before * carry_u) * inverse;
     carry_w = (1 + beta_before * carry_w) * inverse;
     carry_v = beta_before * carry_v * inverse;
