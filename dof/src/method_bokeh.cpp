@@ -236,8 +236,7 @@ void run_bokeh(Image& out, const DofFrame& frame, const DofOptions& settings, Do
     run_adi_spread(out, frame, settings, body_report, kBodySpread);
   } else {
     Image body = clamp_highlights(frame, sprites, boost.threshold);
-    // adi works in place
-    run_adi_spread(body, DofFrame(frame, body), settings, body_report, kBodySpread);
+    run_adi_spread(body, DofFrame(frame, body), settings, body_report, kBodySpread);  // in place
     out = std::move(body);
   }
   report.skipped_fraction = body_report.skipped_fraction;

@@ -656,7 +656,7 @@ void solve_diffusion_one(Strided<const real_t<T>> beta, Strided<const T> d, Stri
                          bool periodic = false) {
   for (std::ptrdiff_t i = 0; i < n; ++i)
     if (!is_finite(d[i])) throw InvalidArgument("rhs", system, i, "is not finite");
-  scratch.real_work.resize(3 * n);
+  scratch.real_work.resize(periodic ? 3 * n : n);  // the kernels' workspace
   scratch.work.resize(2 * n);
   T* result = scratch.work.data();
   const std::ptrdiff_t bad = solve_rescaling_on_overflow(
