@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "tridiff/distributed/detail/agree.hpp"
+#include "tridiff/distributed/detail/diffusion_slab.hpp"
 #include "tridiff/distributed/detail/slab_lanes.hpp"
 #include "tridiff/solvers/detail/periodic.hpp"
 #include "tridiff/solvers/detail/subnormals.hpp"
@@ -213,64 +214,145 @@ template <class T>
     if (!tridiff::detail::is_finite(rows.rhs(i, 0)))
       throw InvalidArgument("rhs", system, first + i, "is not finite");
   }
-  // The link into the first row is the previous rank's, which reports it; an overflow remains.
-  throw NumericalError(system, first, "the reduction overflowed: rhs is too large for this type");
+  // The link into the first row is the previous rank's, which reports it; an overflow remains
+  // (of a pivot, for two links above max() / 2).
+  throw NumericalError(system, first,
+                       "the reduction overflowed: beta or rhs is too large for this type");
 }
 
 // The reduced rows of one system, as sent: (a', c', d') of its first row, then of its last.
 inline constexpr int kReducedValues = 3;
 
+// Values per system that rank q sends to the owner of the system's reduced system, and that
+// the owner returns to q: the general form's reduced rows (3 values a row, 1 or 2 rows) and
+// their solutions; the diffusion form's nine numbers of the separator's row (SlabEnds) and
+// two separators (the previous rank's and q's own).
+template <class T>
+std::ptrdiff_t sent_per_system(const GeneralInputs<T>&, const Plan& plan, int q) {
+  return kReducedValues * plan.reduced_rows(q);
+}
+template <class T>
+std::ptrdiff_t returned_per_system(const GeneralInputs<T>&, const Plan& plan, int q) {
+  return plan.reduced_rows(q);
+}
+template <class T>
+std::ptrdiff_t sent_per_system(const DiffusionInputs<T>&, const Plan&, int) {
+  return DiffusionPartEnds<T>::kArrays;
+}
+template <class T>
+std::ptrdiff_t returned_per_system(const DiffusionInputs<T>&, const Plan&, int) {
+  return 2;
+}
+
 template <class T>
 struct Workspace {
-  tridiff::detail::AlignedBuffer<T> eliminated;  // d', a', c' of every row, W lanes per chunk
-  std::vector<T> send, receive, solved, boundary, first, last;
+  // Three values a row, W lanes per chunk: d', a', c' (general form) or y, l, f (diffusion).
+  tridiff::detail::AlignedBuffer<T> eliminated;
+  std::vector<T> send, receive, solved, boundary;
+  // Per system, the boundary values of the finish: x_0 and x_{m-1} (general form), or the
+  // previous rank's separator and this rank's (diffusion form).
+  std::vector<T> first, last;
 };
 
-// Step 1 on every chunk of W systems: reduce, pack the boundary rows for the all-to-all.
-// Returns the first system whose lane failed, or -1.
-template <class T, int W, class Inputs>
-std::ptrdiff_t reduce_slab(const Inputs& in, const BatchLayout& layout, const Plan& plan,
-                           int threads, Workspace<T>& work) {
+// Runs chunk(k, first, lanes, probe) on every chunk of W systems, shared by `threads`, and
+// returns the first system whose probe is not 0, or -1.
+template <class T, int W, class Chunk>
+std::ptrdiff_t for_each_chunk(std::ptrdiff_t count, int threads, Chunk&& chunk) {
   using R = real_t<T>;
-  const std::ptrdiff_t m = layout.n, count = layout.count, chunks = (count + W - 1) / W;
-  const std::ptrdiff_t r = plan.reduced_rows(plan.rank);
-  work.eliminated.resize(3 * m * W * chunks);
-  work.send.resize(kReducedValues * r * count);
+  const std::ptrdiff_t chunks = (count + W - 1) / W;
   std::vector<std::ptrdiff_t> failed(chunks, -1);
-  const bool unit = layout.system_stride == 1;
 #pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1)
   for (std::ptrdiff_t k = 0; k < chunks; ++k) {
-    // The couplings a' decay geometrically along the slab: without this, far from the slab's
+    // The couplings decay geometrically along the slab: without this, far from the slab's
     // first row they turn subnormal and every operation on them costs ~100 cycles (measured:
     // the reduction of 4096 x 4096 floats took 658 ms, against 191 ms for tridiff::solve).
     const tridiff::detail::SubnormalsAsZero flush;
     const std::ptrdiff_t first = k * W, lanes = std::min<std::ptrdiff_t>(W, count - first);
-    T* dp = work.eliminated.data() + 3 * m * W * k;
-    T* ap = dp + m * W;
-    T* cp = ap + m * W;
     R probe[W] = {};
-    if (lanes == W && unit)
-      reduce_lanes<T, W>(m, rows_at<true>(in, layout, first, plan), dp, ap, cp, W, probe);
-    else if (lanes == W)
-      reduce_lanes<T, W>(m, rows_at<false>(in, layout, first, plan), dp, ap, cp, W, probe);
-    else  // the tail of the batch, system by system in the same workspace format
-      for (std::ptrdiff_t l = 0; l < lanes; ++l)
-        reduce_lanes<T, 1>(m, rows_at<true>(in, layout, first + l, plan), dp + l, ap + l, cp + l, W,
-                           probe + l);
-    for (std::ptrdiff_t l = 0; l < lanes; ++l) {
-      if (probe[l] != R(0) && failed[k] < 0) failed[k] = first + l;
-      T* out = work.send.data() + kReducedValues * r * (first + l);
-      for (std::ptrdiff_t row = 0; row < r; ++row) {
-        const std::ptrdiff_t i = row == 0 ? 0 : m - 1;
-        out[kReducedValues * row + 0] = ap[i * W + l];
-        out[kReducedValues * row + 1] = cp[i * W + l];
-        out[kReducedValues * row + 2] = dp[i * W + l];
-      }
-    }
+    chunk(k, first, lanes, probe);
+    for (std::ptrdiff_t l = 0; l < lanes && failed[k] < 0; ++l)
+      if (probe[l] != R(0)) failed[k] = first + l;
   }
   for (const std::ptrdiff_t system : failed)
     if (system >= 0) return system;
   return -1;
+}
+
+// Step 1, general form, on every chunk of W systems: reduce, pack the boundary rows for the
+// all-to-all. Returns the first system whose lane failed, or -1.
+template <class T, int W>
+std::ptrdiff_t reduce_slab(const GeneralInputs<T>& in, const BatchLayout& layout, const Plan& plan,
+                           int threads, Workspace<T>& work) {
+  const std::ptrdiff_t m = layout.n, r = plan.reduced_rows(plan.rank);
+  const bool unit = layout.system_stride == 1;
+  return for_each_chunk<T, W>(
+      layout.count, threads,
+      [&](std::ptrdiff_t k, std::ptrdiff_t first, std::ptrdiff_t lanes, real_t<T>* probe) {
+        T* dp = work.eliminated.data() + 3 * m * W * k;
+        T* ap = dp + m * W;
+        T* cp = ap + m * W;
+        if (lanes == W && unit)
+          reduce_lanes<T, W>(m, rows_at<true>(in, layout, first, plan), dp, ap, cp, W, probe);
+        else if (lanes == W)
+          reduce_lanes<T, W>(m, rows_at<false>(in, layout, first, plan), dp, ap, cp, W, probe);
+        else  // the tail of the batch, system by system in the same workspace format
+          for (std::ptrdiff_t l = 0; l < lanes; ++l)
+            reduce_lanes<T, 1>(m, rows_at<true>(in, layout, first + l, plan), dp + l, ap + l,
+                               cp + l, W, probe + l);
+        for (std::ptrdiff_t l = 0; l < lanes; ++l) {
+          T* out = work.send.data() + kReducedValues * r * (first + l);
+          for (std::ptrdiff_t row = 0; row < r; ++row) {
+            const std::ptrdiff_t i = row == 0 ? 0 : m - 1;
+            out[kReducedValues * row + 0] = ap[i * W + l];
+            out[kReducedValues * row + 1] = cp[i * W + l];
+            out[kReducedValues * row + 2] = dp[i * W + l];
+          }
+        }
+      });
+}
+
+// The kept rows of chunk k in the diffusion form: y (T), l and f (reals; for complex T they
+// use the first half of their T arrays).
+template <class T, int W>
+struct DiffusionKept {
+  T* y;
+  real_t<T>*l, *f;
+  DiffusionKept(T* eliminated, std::ptrdiff_t m, std::ptrdiff_t k)
+      : y(eliminated + 3 * m * W * k),
+        l(reinterpret_cast<real_t<T>*>(y + m * W)),
+        f(reinterpret_cast<real_t<T>*>(y + 2 * m * W)) {}
+};
+
+// Step 1, diffusion form (diffusion_slab.hpp): reduce, pack the separator rows' numbers.
+template <class T, int W>
+std::ptrdiff_t reduce_slab(const DiffusionInputs<T>& in, const BatchLayout& layout,
+                           const Plan& plan, int threads, Workspace<T>& work) {
+  constexpr int V = SlabEnds<T, W>::kValues;
+  const std::ptrdiff_t m = layout.n;
+  const bool unit = layout.system_stride == 1;
+  return for_each_chunk<T, W>(
+      layout.count, threads,
+      [&](std::ptrdiff_t k, std::ptrdiff_t first, std::ptrdiff_t lanes, real_t<T>* probe) {
+        const DiffusionKept<T, W> kept(work.eliminated.data(), m, k);
+        T* out = work.send.data() + V * first;
+        if (lanes == W) {
+          SlabEnds<T, W> ends;
+          if (unit)
+            reduce_diffusion_lanes<T, W>(m, rows_at<true>(in, layout, first, plan), kept.y, kept.l,
+                                         kept.f, W, ends, probe);
+          else
+            reduce_diffusion_lanes<T, W>(m, rows_at<false>(in, layout, first, plan), kept.y, kept.l,
+                                         kept.f, W, ends, probe);
+          for (int l = 0; l < W; ++l) ends.pack(l, out + V * l);
+        } else {  // the tail of the batch, system by system in the same workspace format
+          for (std::ptrdiff_t l = 0; l < lanes; ++l) {
+            SlabEnds<T, 1> ends;
+            reduce_diffusion_lanes<T, 1>(m, rows_at<true>(in, layout, first + l, plan), kept.y + l,
+                                         kept.l + l, kept.f + l, W, ends, probe + l);
+            ends.pack(0, out + V * l);
+          }
+        }
+      });
 }
 
 // Byte counts and displacements of an all-to-all in which rank q's part holds
@@ -294,7 +376,7 @@ void alltoall_counts(const Plan& plan, Size&& size, std::vector<int>& counts,
 // Step 2 on this rank's share of the reduced systems: every rank's rows of system j, in rank
 // order, form one tridiagonal system with unit diagonal (periodic if the systems are).
 template <class T>
-void solve_reduced(const Plan& plan, Workspace<T>& work) {
+void solve_reduced(const GeneralInputs<T>&, const Plan& plan, Workspace<T>& work) {
   using tridiff::detail::periodic;
   using tridiff::detail::thomas;
   const std::ptrdiff_t begin = plan.block_begin(plan.rank);
@@ -342,44 +424,90 @@ void solve_reduced(const Plan& plan, Workspace<T>& work) {
   }
 }
 
-// Step 3: every row of the slab from the two boundary unknowns of its system. Returns the first
-// system whose solution is not finite, or -1.
-template <class T, int W>
-std::ptrdiff_t finish_slab(T* x, const BatchLayout& layout, int threads, Workspace<T>& work) {
+// Step 2, diffusion form, on this rank's share: every rank's separator row of system j, in rank
+// order, forms an M-matrix in leak form (a ring if the systems are periodic). Rank q gets back
+// the separator before its slab (0 before the first row of an open system) and its own.
+template <class T>
+void solve_reduced(const DiffusionInputs<T>&, const Plan& plan, Workspace<T>& work) {
   using R = real_t<T>;
-  const std::ptrdiff_t m = layout.n, count = layout.count, chunks = (count + W - 1) / W;
-  std::vector<std::ptrdiff_t> failed(chunks, -1);
-  const bool unit = layout.system_stride == 1;
-#pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1)
-  for (std::ptrdiff_t k = 0; k < chunks; ++k) {
-    const tridiff::detail::SubnormalsAsZero flush;  // the a' and c' read here may be tiny too
-    const std::ptrdiff_t first = k * W, lanes = std::min<std::ptrdiff_t>(W, count - first);
-    const T* dp = work.eliminated.data() + 3 * m * W * k;
-    const T* ap = dp + m * W;
-    const T* cp = ap + m * W;
-    T* out = x + layout.offset(first, 0);
-    R probe[W] = {};
-    const T* xf = work.first.data() + first;
-    const T* xl = work.last.data() + first;
-    if (lanes == W && unit)
-      finish_lanes<T, W>(
-          m, dp, ap, cp, W, xf, xl,
-          [&](std::ptrdiff_t i, int l, T v) { out[i * layout.row_stride + l] = v; }, probe);
-    else if (lanes == W)
-      finish_lanes<T, W>(
-          m, dp, ap, cp, W, xf, xl,
-          [&](std::ptrdiff_t i, int l, T v) { out[layout.offset(l, i)] = v; }, probe);
-    else
-      for (std::ptrdiff_t l = 0; l < lanes; ++l)
-        finish_lanes<T, 1>(
-            m, dp + l, ap + l, cp + l, W, xf + l, xl + l,
-            [&](std::ptrdiff_t i, int, T v) { out[layout.offset(l, i)] = v; }, probe + l);
-    for (std::ptrdiff_t l = 0; l < lanes; ++l)
-      if (probe[l] != R(0) && failed[k] < 0) failed[k] = first + l;
+  constexpr int V = DiffusionPartEnds<T>::kArrays;
+  const std::ptrdiff_t begin = plan.block_begin(plan.rank);
+  const std::ptrdiff_t systems = plan.block_begin(plan.rank + 1) - begin, P = plan.size;
+  std::vector<T> values(3 * P), x(P);
+  std::vector<R> reals(6 * P + 3 * P);  // the ends' reals, then the elimination's workspace
+  const DiffusionPartEnds<T> ends(values.data(), reals.data(), P);
+  work.solved.resize(2 * P * systems);
+  for (std::ptrdiff_t j = 0; j < systems; ++j) {
+    for (std::ptrdiff_t q = 0; q < P; ++q)
+      unpack_slab_ends(work.receive.data() + V * (q * systems + j), q, ends);
+    if (!tridiff::detail::solve_separators(P, ends, x.data(), reals.data() + 6 * P, plan.periodic))
+      throw NumericalError(begin + j, -1,
+                           "the system of the slabs' last rows overflowed: beta or rhs is too "
+                           "large for this type");
+    for (std::ptrdiff_t q = 0; q < P; ++q) {
+      T* out = work.solved.data() + 2 * (q * systems + j);
+      out[0] = q > 0 ? x[q - 1] : (plan.periodic ? x[P - 1] : T(0));
+      out[1] = x[q];
+    }
   }
-  for (const std::ptrdiff_t system : failed)
-    if (system >= 0) return system;
-  return -1;
+}
+
+// Step 3 on every chunk of W systems: finish.template operator()<V>(k, l, first, last, store,
+// probe) writes V lanes of chunk k from lane l on (V = W for a full chunk, 1 lane by lane for
+// the tail) through store(i, lane, value); first and last are the boundary values of its
+// systems (Workspace). Returns the first system whose solution is not finite, or -1.
+template <class T, int W, class Finish>
+std::ptrdiff_t finish_chunks(T* x, const BatchLayout& layout, int threads, const Workspace<T>& work,
+                             Finish&& finish) {
+  const bool unit = layout.system_stride == 1;
+  return for_each_chunk<T, W>(
+      layout.count, threads,
+      [&](std::ptrdiff_t k, std::ptrdiff_t first, std::ptrdiff_t lanes, real_t<T>* probe) {
+        T* out = x + layout.offset(first, 0);
+        const T* xf = work.first.data() + first;
+        const T* xl = work.last.data() + first;
+        if (lanes == W && unit)
+          finish.template operator()<W>(
+              k, 0, xf, xl,
+              [&](std::ptrdiff_t i, int l, T v) { out[i * layout.row_stride + l] = v; }, probe);
+        else if (lanes == W)
+          finish.template operator()<W>(
+              k, 0, xf, xl, [&](std::ptrdiff_t i, int l, T v) { out[layout.offset(l, i)] = v; },
+              probe);
+        else
+          for (std::ptrdiff_t l = 0; l < lanes; ++l)
+            finish.template operator()<1>(
+                k, l, xf + l, xl + l,
+                [&](std::ptrdiff_t i, int, T v) { out[layout.offset(l, i)] = v; }, probe + l);
+      });
+}
+
+// Step 3, general form: every row of the slab from its two boundary unknowns.
+template <class T, int W>
+std::ptrdiff_t finish_slab(const GeneralInputs<T>&, T* x, const BatchLayout& layout, int threads,
+                           Workspace<T>& work) {
+  const std::ptrdiff_t m = layout.n;
+  return finish_chunks<T, W>(x, layout, threads, work,
+                             [&]<int V>(std::ptrdiff_t k, std::ptrdiff_t l, const T* first,
+                                        const T* last, auto&& store, real_t<T>* probe) {
+                               const T* dp = work.eliminated.data() + 3 * m * W * k + l;
+                               finish_lanes<T, V>(m, dp, dp + m * W, dp + 2 * m * W, W, first, last,
+                                                  store, probe);
+                             });
+}
+
+// Step 3, diffusion form: the slab's interior rows by back substitution from the separators.
+template <class T, int W>
+std::ptrdiff_t finish_slab(const DiffusionInputs<T>&, T* x, const BatchLayout& layout, int threads,
+                           Workspace<T>& work) {
+  const std::ptrdiff_t m = layout.n;
+  return finish_chunks<T, W>(x, layout, threads, work,
+                             [&]<int V>(std::ptrdiff_t k, std::ptrdiff_t l, const T* left,
+                                        const T* own, auto&& store, real_t<T>* probe) {
+                               const DiffusionKept<T, W> kept(work.eliminated.data(), m, k);
+                               finish_diffusion_lanes<T, V>(m, kept.y + l, kept.l + l, kept.f + l,
+                                                            W, left, own, store, probe);
+                             });
 }
 
 // The three steps and the two all-to-alls, with the ranks agreeing on any failure before the
@@ -396,44 +524,46 @@ Report solve_planned(const Inputs& in, T* x, const BatchLayout& layout, const Pl
     seconds += now - clock;
     clock = now;
   };
+  // Values per system: sent by rank q (and received by the owner), returned to rank q.
+  auto sent = [&](int q) { return sent_per_system(in, plan, q); };
+  auto returned = [&](int q) { return returned_per_system(in, plan, q); };
+  const std::ptrdiff_t chunks = (layout.count + W - 1) / W;
   Failure failure;
   capture(failure, 1, [&] {
+    work.eliminated.resize(3 * layout.n * W * chunks);
+    work.send.resize(sent(plan.rank) * layout.count);
     const std::ptrdiff_t bad = reduce_slab<T, W>(in, layout, plan, threads, work);
     if (bad >= 0) report_reduction(in, layout, bad, plan);
   });
-  work.send.resize(kReducedValues * plan.reduced_rows(plan.rank) * layout.count);
+  work.send.resize(sent(plan.rank) * layout.count);
   lap(report.reduce_seconds);
   // A rank whose reduction failed still takes part (its rows are garbage; the agreement below
   // names its failure, the earliest stage, rather than what the garbage does elsewhere).
   std::vector<int> send_counts, send_displacements, receive_counts, receive_displacements;
-  const std::ptrdiff_t r = plan.reduced_rows(plan.rank);
   const std::ptrdiff_t mine = plan.block_begin(plan.rank + 1) - plan.block_begin(plan.rank);
   auto block = [&](int q) { return plan.block_begin(q + 1) - plan.block_begin(q); };
   alltoall_counts<T>(
-      plan, [&](int q) { return kReducedValues * r * block(q); }, send_counts, send_displacements);
+      plan, [&](int q) { return sent(plan.rank) * block(q); }, send_counts, send_displacements);
   alltoall_counts<T>(
-      plan, [&](int q) { return kReducedValues * plan.reduced_rows(q) * mine; }, receive_counts,
-      receive_displacements);
+      plan, [&](int q) { return sent(q) * mine; }, receive_counts, receive_displacements);
   std::ptrdiff_t received = 0;
-  for (int q = 0; q < plan.size; ++q) received += kReducedValues * plan.reduced_rows(q) * mine;
+  for (int q = 0; q < plan.size; ++q) received += sent(q) * mine;
   work.receive.resize(received);
   MPI_Alltoallv(work.send.data(), send_counts.data(), send_displacements.data(), MPI_BYTE,
                 work.receive.data(), receive_counts.data(), receive_displacements.data(), MPI_BYTE,
                 comm);
   lap(report.exchange_seconds);
-  capture(failure, 2, [&] { solve_reduced(plan, work); });
+  capture(failure, 2, [&] { solve_reduced(in, plan, work); });
   lap(report.reduced_seconds);
   agree(failure, comm);
 
-  // The solved boundary unknowns go back along the reverse paths, a third of the size.
-  for (int q = 0; q < plan.size; ++q) {
-    std::swap(send_counts[q], receive_counts[q]);
-    std::swap(send_displacements[q], receive_displacements[q]);
-    send_counts[q] /= kReducedValues;
-    send_displacements[q] /= kReducedValues;
-    receive_counts[q] /= kReducedValues;
-    receive_displacements[q] /= kReducedValues;
-  }
+  // The solved boundary values go back along the reverse paths.
+  alltoall_counts<T>(
+      plan, [&](int q) { return returned(q) * mine; }, send_counts, send_displacements);
+  alltoall_counts<T>(
+      plan, [&](int q) { return returned(plan.rank) * block(q); }, receive_counts,
+      receive_displacements);
+  const std::ptrdiff_t r = returned(plan.rank);
   work.boundary.resize(r * layout.count);
   MPI_Alltoallv(work.solved.data(), send_counts.data(), send_displacements.data(), MPI_BYTE,
                 work.boundary.data(), receive_counts.data(), receive_displacements.data(), MPI_BYTE,
@@ -446,7 +576,7 @@ Report solve_planned(const Inputs& in, T* x, const BatchLayout& layout, const Pl
   }
   lap(report.exchange_seconds);
   capture(failure, 3, [&] {
-    const std::ptrdiff_t bad = finish_slab<T, W>(x, layout, threads, work);
+    const std::ptrdiff_t bad = finish_slab<T, W>(in, x, layout, threads, work);
     if (bad >= 0)
       throw NumericalError(bad, -1, "the solution overflowed: rhs is too large for this type");
   });

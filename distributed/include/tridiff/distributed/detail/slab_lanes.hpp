@@ -1,12 +1,15 @@
-// The two local steps of the distributed solve on one rank's slab of rows, W systems at a time
-// (one SIMD lane each): the modified Thomas reduction (PaScaL_TDMA; Laszlo, Giles & Appleyard
-// 2016) that leaves two boundary rows per system, and the finish from the boundary unknowns.
+// The two local steps of the distributed solve (general form) on one rank's slab of rows, W
+// systems at a time (one SIMD lane each): the modified Thomas reduction (PaScaL_TDMA; Laszlo,
+// Giles & Appleyard 2016) that leaves two boundary rows per system, and the finish from the
+// boundary unknowns.
 // The row arithmetic is tridiff/solvers/detail/modified_thomas.hpp, shared with the in-process
 // partitioned solve (partitioned_lanes.hpp: the parts of one long system in lanes). What is
 // this file's own is the slab's layout: W systems of one slab, read where they lie (general or
 // diffusion form), that may hold 1 or 2 rows and whose first row couples to the previous rank;
 // the eliminated rows are kept in full for the finish, which substitutes back instead of
 // eliminating again (partitioned_lanes re-reads its inputs: its parts are sized for L2).
+// The diffusion form's rows are read here too (DiffusionRows); its steps are
+// diffusion_slab.hpp.
 #pragma once
 
 #include <algorithm>
@@ -50,8 +53,8 @@ struct GeneralRows {
 };
 
 // The diffusion form (seed 000 eq. 3.10): a_i = -beta_{i-1}, b_i = 1 + beta_{i-1} + beta_i,
-// c_i = -beta_i. The link into the slab's first row lives on the previous rank: `ghost[l]`
-// (0 at global row 0 of a non-periodic system).
+// c_i = -beta_i, solved without expanding them (diffusion_slab.hpp). The link into the slab's
+// first row lives on the previous rank: `ghost[l]` (0 at global row 0 of a non-periodic system).
 template <class T, bool kUnitLanes>
 struct DiffusionRows {
   using R = real_t<T>;
@@ -66,9 +69,6 @@ struct DiffusionRows {
     if (i < 0) return ghost[l];
     return i == rows - 1 && open_last ? R(0) : beta[lanes.at(i, l)];
   }
-  T sub(std::ptrdiff_t i, int l) const { return T(-link(i - 1, l)); }
-  T diag(std::ptrdiff_t i, int l) const { return T(1 + link(i - 1, l) + link(i, l)); }
-  T super(std::ptrdiff_t i, int l) const { return T(-link(i, l)); }
   T rhs(std::ptrdiff_t i, int l) const { return d[lanes.at(i, l)]; }
   // A negative conductance (refused, as by tridiff::solve_diffusion) counts as a flaw.
   R flaw(std::ptrdiff_t i, int l) const { return link(i, l) < 0 ? R(1) : R(0); }

@@ -37,56 +37,118 @@ void diffusion_thomas(std::ptrdiff_t n, Strided<const real_t<T>> beta, Strided<c
   for (std::ptrdiff_t i = n - 2; i >= 0; --i) x[i] += work[i] * x[i + 1];
 }
 
-// The periodic system (beta[n-1] links x[n-1] to x[0]), as subtraction-free as the open one:
-// the ring is cut at row 0. Rows 1 .. n-1 form an open chain whose ends couple to x_0 (through
-// beta[0] at row 1 and beta[n-1] at row n-1), so by linearity x_i = u_i + v_i x_0, with u the
-// chain's solution for d and v its response to x_0. The chain's rows sum to 1 apart from those
-// two links, so its response to all ones, w, satisfies w + v = 1: row 0 then reads
-//   (1 + beta[n-1] w_{n-1} + beta[0] w_1) x_0 = d_0 + beta[n-1] u_{n-1} + beta[0] u_1,
+// A row of an M-matrix written by what makes it one: its leak (row sum) and its two links,
+//   (leak + before + after) x_k - before x_{k-1} - after x_{k+1} = rhs,   all three >= 0.
+// The diffusion form is leak 1, before beta_{k-1}, after beta_k; the reduced systems of the
+// diffusion form's parts (partitioned_diffusion.hpp, the distributed solve) have other leaks.
+// Eliminating with the leak carried, instead of the diagonal, needs no subtraction: every
+// pivot is leak + after + (a share of before), x a convex combination of rhs / leak.
+template <class T>
+struct LeakRow {
+  real_t<T> leak, before, after;
+  T rhs;
+};
+
+// The pivot's inverse, taken in halves where the pivot overflows (two links above max() / 2):
+// 1 / inf would be a silent 0. `probe` counts a pivot that not even that keeps finite.
+template <class R>
+inline R leak_pivot_inverse(R g, R after, R& probe) {
+  const R pivot = g + after;
+  if (std::isfinite(pivot)) return 1 / pivot;
+  const R half = R(0.5) * g + R(0.5) * after;
+  probe += std::isfinite(half) ? R(0) : R(1);
+  return R(0.5) / half;
+}
+
+// The open chain of `n` leak rows (row(k, r) sets r to row k; row 0's before and row n-1's after
+// couple to nothing and are not used). x may be the storage row() reads, as row k is read
+// before x[k] is written; `work` holds n reals. Returns false if a pivot or x is not finite.
+template <class T, class Row>
+bool leak_elimination(std::ptrdiff_t n, Row&& row, Strided<T> x, real_t<T>* work) {
+  using R = real_t<T>;
+  R e_before = 1, probe = 0;
+  T carry = T(0);
+  for (std::ptrdiff_t k = 0; k < n; ++k) {
+    LeakRow<T> r;
+    row(k, r);
+    const R link_before = k > 0 ? r.before : R(0), after = k + 1 < n ? r.after : R(0);
+    const R g = r.leak + link_before * e_before;
+    const R inverse = leak_pivot_inverse(g, after, probe);
+    carry = (r.rhs + link_before * carry) * inverse;
+    x[k] = carry;
+    work[k] = after * inverse;
+    e_before = g * inverse;
+  }
+  for (std::ptrdiff_t k = n - 2; k >= 0; --k) x[k] += work[k] * x[k + 1];
+  for (std::ptrdiff_t k = 0; k < n; ++k) probe += is_finite(x[k]) ? R(0) : R(1);
+  return probe == 0;
+}
+
+// The ring of `n` leak rows (row 0's before links it to row n-1, row n-1's after to row 0),
+// as subtraction-free as the open chain: the ring is cut at row 0. Rows 1 .. n-1 form an open
+// chain whose ends couple to x_0 (through row 1's before and row n-1's after), so by linearity
+// x_k = u_k + v_k x_0, with u the chain's solution for rhs and v its response to x_0. The
+// chain's rows sum to their leaks apart from those two links, so its response to the leaks,
+// w, satisfies w + v = 1: row 0 then reads
+//   (leak_0 + before_0 w_{n-1} + after_0 w_1) x_0 = rhs_0 + before_0 u_{n-1} + after_0 u_1,
 // every term >= 0 (the textbook route, Sherman-Morrison on the expanded matrix, subtracts, and
-// its error grows like beta * epsilon). x is again a convex combination of d. x may alias d;
-// `work` holds 3n reals.
+// its error grows like beta * epsilon). x may be the storage row() reads; `work` holds 3n
+// reals. Returns false if a pivot or x is not finite.
+template <class T, class Row>
+bool ring_leak_elimination(std::ptrdiff_t n, Row&& row, Strided<T> x, real_t<T>* work) {
+  using R = real_t<T>;
+  LeakRow<T> first;  // x may be rhs: row 0 is overwritten last, but read it first
+  row(0, first);
+  if (n == 1) {  // the row's links join x_0 to itself
+    x[0] = first.rhs / first.leak;
+    return is_finite(x[0]);
+  }
+  R* const multiplier = work;  // row k: x_k = y_k + multiplier_k x_{k+1} (k < n-1)
+  R* const w = work + n;       // the chain's response to its leaks
+  R* const v = work + 2 * n;   // and to x_0
+  R e_before = 1, carry_w = 0, carry_v = 1, probe = 0;
+  T carry_u = T(0);
+  for (std::ptrdiff_t k = 1; k < n; ++k) {
+    LeakRow<T> r;  // row n-1's after is the link back to x_0
+    row(k, r);
+    // g carries the link to x_0 at full size in row 1 (e_before = 1).
+    const R g = r.leak + r.before * e_before;
+    const R inverse = leak_pivot_inverse(g, r.after, probe);
+    carry_u = (r.rhs + r.before * carry_u) * inverse;
+    carry_w = (r.leak + r.before * carry_w) * inverse;
+    carry_v = r.before * carry_v * inverse;
+    x[k] = carry_u;
+    w[k] = carry_w;
+    v[k] = carry_v;
+    multiplier[k] = r.after * inverse;
+    e_before = g * inverse;
+  }
+  v[n - 1] += multiplier[n - 1];  // the last row's own link to x_0
+  for (std::ptrdiff_t k = n - 2; k >= 1; --k) {
+    x[k] += multiplier[k] * x[k + 1];
+    w[k] += multiplier[k] * w[k + 1];
+    v[k] += multiplier[k] * v[k + 1];
+  }
+  const T x0 = (first.rhs + first.before * x[n - 1] + first.after * x[1]) /
+               (first.leak + first.before * w[n - 1] + first.after * w[1]);
+  x[0] = x0;
+  for (std::ptrdiff_t k = 1; k < n; ++k) x[k] += v[k] * x0;
+  for (std::ptrdiff_t k = 0; k < n; ++k) probe += is_finite(x[k]) ? R(0) : R(1);
+  return probe == 0;
+}
+
+// The periodic diffusion system (beta[n-1] links x[n-1] to x[0]): the ring of leak rows
+// (1, beta[k-1], beta[k]). x may alias d; `work` holds 3n reals.
 template <class T>
 void periodic_diffusion_thomas(std::ptrdiff_t n, Strided<const real_t<T>> beta, Strided<const T> d,
                                Strided<T> x, real_t<T>* work) {
   using R = real_t<T>;
-  if (n == 1) {  // the row's links join x_0 to itself: the matrix is 1
-    x[0] = d[0];
-    return;
-  }
-  R* const multiplier = work;  // row i: x_i = y_i + multiplier_i x_{i+1} (i < n-1)
-  R* const w = work + n;       // the chain's response to all ones
-  R* const v = work + 2 * n;   // and to x_0
-  const T d0 = d[0];           // x may be d: row 0 is overwritten last, but read it first
-  R beta_before = beta[0], e_before = 1, carry_w = 0, carry_v = 1;
-  T carry_u = T(0);
-  for (std::ptrdiff_t i = 1; i < n; ++i) {
-    const R beta_here = beta[i];  // for i = n-1 the link back to x_0
-    const R g = 1 + beta_before * e_before;
-    // g carries the link to x_0 at full size (g = 1 + beta[0] at row 1), so with two links
-    // above max() / 2 the pivot overflows: its inverse is then taken in halves, not as 0.
-    const R pivot = g + beta_here;
-    const R inverse = std::isfinite(pivot) ? 1 / pivot : R(0.5) / (R(0.5) * g + R(0.5) * beta_here);
-    carry_u = (d[i] + beta_before * carry_u) * inverse;
-    carry_w = (1 + beta_before * carry_w) * inverse;
-    carry_v = beta_before * carry_v * inverse;
-    x[i] = carry_u;
-    w[i] = carry_w;
-    v[i] = carry_v;
-    multiplier[i] = beta_here * inverse;
-    e_before = g * inverse;
-    beta_before = beta_here;
-  }
-  v[n - 1] += multiplier[n - 1];  // the last row's own link to x_0
-  for (std::ptrdiff_t i = n - 2; i >= 1; --i) {
-    x[i] += multiplier[i] * x[i + 1];
-    w[i] += multiplier[i] * w[i + 1];
-    v[i] += multiplier[i] * v[i + 1];
-  }
-  const R up = beta[n - 1], down = beta[0];
-  const T x0 = (d0 + up * x[n - 1] + down * x[1]) / (1 + up * w[n - 1] + down * w[1]);
-  x[0] = x0;
-  for (std::ptrdiff_t i = 1; i < n; ++i) x[i] += v[i] * x0;
+  ring_leak_elimination(
+      n,
+      [&](std::ptrdiff_t k, LeakRow<T>& row) {
+        row = {R(1), beta[k > 0 ? k - 1 : n - 1], beta[k], d[k]};
+      },
+      x, work);
 }
 
 // Reals of workspace DiffusionLanes<T, W, rhs> needs.

@@ -22,8 +22,8 @@
 //        (s + l + r) x_k - l x_{k-1} - r x_{k+1} = d_k + b_a u_last + b_b u_first',
 //        s = 1 + b_a w_last + b_b w_first',  l = b_a L_last,  r = b_b R_first',
 //     (b_a, b_b: the separator's links up and down; ' the part after), every term >= 0: an
-//     M-matrix with row sums s >= 1, solved serially (one row a part) by the same
-//     subtraction-free elimination as the diffusion kernel.
+//     M-matrix with row sums s >= 1, solved serially (one row a part) by the elimination of
+//     leak rows (diffusion_form.hpp), as subtraction-free as the diffusion kernel.
 //  3. finish: each interior again by the diffusion kernel, the separators as boundary values
 //     (they enter as the carried value before the first row and after the last), stored in
 //     L2 between the sweeps and transposed back into x.
@@ -34,6 +34,7 @@
 #include <cstddef>
 #include <limits>
 
+#include "tridiff/solvers/detail/diffusion_form.hpp"
 #include "tridiff/solvers/detail/partitioned_lanes.hpp"
 #include "tridiff/solvers/detail/scalar.hpp"
 #include "tridiff/solvers/detail/subnormals.hpp"
@@ -53,30 +54,34 @@ struct DiffusionPartGroup {
   std::ptrdiff_t first_part = 0;
 };
 
-// What step 1 keeps of each part, and what step 2 needs of it (one entry a part).
+// What step 1 keeps of each part, and what step 2 needs of it (one entry a part). The
+// distributed solve keeps the same of each rank's slab (with complex right-hand sides: u and
+// d complex, the rest real).
 template <class T>
 struct DiffusionPartEnds {
+  using R = real_t<T>;
   T* u_first;
-  T* w_first;
-  T* r_first;
+  R* w_first;
+  R* r_first;
   T* u_last;
-  T* w_last;
-  T* l_last;
-  T* beta_right;      // the link from the interior's last row to the separator
-  T* separator_beta;  // the separator's link to the next part's first row
+  R* w_last;
+  R* l_last;
+  R* beta_right;      // the link from the interior's last row to the separator
+  R* separator_beta;  // the separator's link to the next part's first row
   T* separator_d;
 
   static constexpr int kArrays = 9;
-  DiffusionPartEnds(T* storage, std::ptrdiff_t parts)
-      : u_first(storage),
-        w_first(storage + parts),
-        r_first(storage + 2 * parts),
-        u_last(storage + 3 * parts),
-        w_last(storage + 4 * parts),
-        l_last(storage + 5 * parts),
-        beta_right(storage + 6 * parts),
-        separator_beta(storage + 7 * parts),
-        separator_d(storage + 8 * parts) {}
+  // `values`: 3 * parts scalars (u_first, u_last, separator_d); `reals`: 6 * parts.
+  DiffusionPartEnds(T* values, R* reals, std::ptrdiff_t parts)
+      : u_first(values),
+        w_first(reals),
+        r_first(reals + parts),
+        u_last(values + parts),
+        w_last(reals + 2 * parts),
+        l_last(reals + 3 * parts),
+        beta_right(reals + 4 * parts),
+        separator_beta(reals + 5 * parts),
+        separator_d(values + 2 * parts) {}
 };
 
 // Group g's pointers: straight into beta and d where its rows are contiguous and its last
@@ -129,6 +134,29 @@ inline T flush_negligible(T value, T weight) {
   return value * std::max(T(1), weight) < kNegligible ? T(0) : value;
 }
 
+// One row of step 1 (see the header) in one lane: the diffusion kernel's forward step on the
+// right-hand sides d (y_u), all ones (y_w) and beta_left e_first (y_l), with the first row's
+// u and w summed through the product of the multipliers. Returns the multiplier f (row j:
+// x_j = y_j + f x_{j+1}). The pivot g + beta_here overflows only for beta above max() / 2;
+// its inverse would then be a silent 0, so the probe counts it.
+template <class T, class R>
+inline R diffusion_reduce_row(R beta_here, T rhs, R beta_left, R& beta_before, R& e_before, T& y_u,
+                              R& y_w, R& y_l, R& product, T& u_first, R& w_first, R& probe) {
+  const R g = 1 + beta_before * e_before;
+  const R inverse = 1 / (g + beta_here);
+  y_u = (rhs + beta_before * y_u) * inverse;
+  y_w = (1 + beta_before * y_w) * inverse;
+  y_l = flush_negligible(beta_before * y_l * inverse, beta_here);
+  u_first += product * y_u;
+  w_first += product * y_w;
+  const R multiplier = beta_here * inverse;
+  product = flush_negligible(product * multiplier, beta_left);
+  e_before = g * inverse;
+  beta_before = beta_here;
+  probe += zero_if_finite(g + beta_here) + zero_if_finite(rhs) + R(beta_here < 0);
+  return multiplier;
+}
+
 // Step 1 on one group (see the header): fills the group's entries of `ends`. `block` holds
 // 2 * kTransposeBlock * W values. Returns false if a value was not finite or a beta negative.
 template <class T, int W>
@@ -160,22 +188,9 @@ bool reduce_diffusion_group(const DiffusionPartGroup<T, W>& group, std::ptrdiff_
       const T* b = beta_block + (j - j0) * W;
       const T* rhs = d_block + (j - j0) * W;
 #pragma omp simd
-      for (int l = 0; l < W; ++l) {
-        const T beta_here = b[l];
-        const T g = 1 + beta_before[l] * e_before[l];
-        const T inverse = 1 / (g + beta_here);
-        y_u[l] = (rhs[l] + beta_before[l] * y_u[l]) * inverse;
-        y_w[l] = (1 + beta_before[l] * y_w[l]) * inverse;
-        y_l[l] = flush_negligible(beta_before[l] * y_l[l] * inverse, beta_here);
-        u_first[l] += product[l] * y_u[l];
-        w_first[l] += product[l] * y_w[l];
-        product[l] = flush_negligible(product[l] * beta_here * inverse, group.beta_left[l]);
-        e_before[l] = g * inverse;
-        beta_before[l] = beta_here;
-        // The pivot g + beta_here overflows only for beta above max() / 2; its inverse would
-        // then be a silent 0.
-        probe[l] += zero_if_finite(g + beta_here) + zero_if_finite(rhs[l]) + T(beta_here < 0);
-      }
+      for (int l = 0; l < W; ++l)
+        diffusion_reduce_row(b[l], rhs[l], group.beta_left[l], beta_before[l], e_before[l], y_u[l],
+                             y_w[l], y_l[l], product[l], u_first[l], w_first[l], probe[l]);
     }
     if (interior >= j0 && interior < j0 + count)
       for (int l = 0; l < W; ++l) {
@@ -203,35 +218,31 @@ bool reduce_diffusion_group(const DiffusionPartGroup<T, W>& group, std::ptrdiff_
   return healthy;
 }
 
-// Step 2: the separators' values into `x` (one a part). `work` holds a value a part. Returns
-// false if the inputs or the solution were not finite. The last part's separator links to
-// nothing below it (it is row n-1 or a padding row).
+// Separator k's row (see the header) as a leak row: its neighbours' interiors substituted.
+// The part after the last is the first if `periodic` (the distributed solve's ring), else
+// nothing (the last part's separator is row n-1 or a padding row).
 template <class T>
-bool solve_separators(std::ptrdiff_t parts, const DiffusionPartEnds<T>& ends, T* x, T* work) {
-  T e_before = 1, y_before = 0, probe = 0;
-  T* const multiplier = work;
-  for (std::ptrdiff_t k = 0; k < parts; ++k) {
-    const T up = ends.beta_right[k];
-    const T down = k + 1 < parts ? ends.separator_beta[k] : T(0);
-    const T w_after = k + 1 < parts ? ends.w_first[k + 1] : T(0);
-    const T u_after = k + 1 < parts ? ends.u_first[k + 1] : T(0);
-    const T r_after = k + 1 < parts ? ends.r_first[k + 1] : T(0);
-    const T leak = 1 + up * ends.w_last[k] + down * w_after;
-    const T link_up = up * ends.l_last[k];
-    const T link_down = down * r_after;
-    const T rhs = ends.separator_d[k] + up * ends.u_last[k] + down * u_after;
-    const T g = leak + link_up * e_before;
-    const T pivot = g + link_down;
-    const T inverse = 1 / pivot;
-    probe += zero_if_finite(pivot);
-    y_before = (rhs + link_up * y_before) * inverse;
-    x[k] = y_before;
-    multiplier[k] = link_down * inverse;
-    e_before = g * inverse;
-  }
-  for (std::ptrdiff_t k = parts - 2; k >= 0; --k) x[k] += multiplier[k] * x[k + 1];
-  for (std::ptrdiff_t k = 0; k < parts; ++k) probe += zero_if_finite(x[k]);
-  return probe == 0;
+void separator_row(const DiffusionPartEnds<T>& ends, std::ptrdiff_t k, std::ptrdiff_t parts,
+                   bool periodic, LeakRow<T>& row) {
+  using R = real_t<T>;
+  const std::ptrdiff_t after = k + 1 < parts ? k + 1 : (periodic ? 0 : -1);
+  const R up = ends.beta_right[k];
+  const R down = after >= 0 ? ends.separator_beta[k] : R(0);
+  const R w_after = after >= 0 ? ends.w_first[after] : R(0);
+  const R r_after = after >= 0 ? ends.r_first[after] : R(0);
+  const T u_after = after >= 0 ? ends.u_first[after] : T(0);
+  row = {1 + up * ends.w_last[k] + down * w_after, up * ends.l_last[k], down * r_after,
+         ends.separator_d[k] + up * ends.u_last[k] + down * u_after};
+}
+
+// Step 2: the separators' values into `x` (one a part). `work` holds a value a part (3 if
+// `periodic`). Returns false if the inputs or the solution were not finite.
+template <class T>
+bool solve_separators(std::ptrdiff_t parts, const DiffusionPartEnds<T>& ends, T* x, real_t<T>* work,
+                      bool periodic = false) {
+  auto row = [&](std::ptrdiff_t k, LeakRow<T>& r) { separator_row(ends, k, parts, periodic, r); };
+  return periodic ? ring_leak_elimination(parts, row, Strided<T>{x, 1}, work)
+                  : leak_elimination(parts, row, Strided<T>{x, 1}, work);
 }
 
 // Step 3 on one group: each interior by the diffusion kernel with the separators on either
@@ -322,9 +333,9 @@ std::ptrdiff_t partitioned_diffusion(Strided<const T> beta, Strided<const T> d, 
   static thread_local AlignedBuffer<T> shared;
   shared.resize(kept + (direct ? 0 : padded));
   T* const storage = shared.data();  // `shared` names another buffer on the team's threads
-  const DiffusionPartEnds<T> ends(storage, parts);
+  const DiffusionPartEnds<T> ends(storage, storage + 3 * parts, parts);
   T* const separators = storage + DiffusionPartEnds<T>::kArrays * parts;
-  T* const separator_work = separators + parts;
+  T* const separator_work = separators + parts;  // the open chain needs a value a part
   T* const out = direct ? x.data : storage + kept;
   const bool streaming = direct && n * std::ptrdiff_t(sizeof(T)) >= kStreamingBytes;
   const int team = static_cast<int>(std::min<std::ptrdiff_t>(threads, layout.groups));
