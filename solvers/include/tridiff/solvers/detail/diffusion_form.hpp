@@ -398,15 +398,41 @@ class DiffusionLanes {
   T carry_[Rhs][W];  // forward: d'_{i-1}; backward: x_{i+1}
 };
 
+// Asks for the cache lines of `count` consecutive values at p (for writing if `write`).
+template <class V>
+inline void prefetch_values(const V* p, std::ptrdiff_t count, bool write = false) {
+  constexpr std::ptrdiff_t kLine = 64 / sizeof(V) > 0 ? 64 / sizeof(V) : 1;
+  for (std::ptrdiff_t k = 0; k < count; k += kLine)
+    write ? __builtin_prefetch(p + k, 1) : __builtin_prefetch(p + k, 0);
+}
+
 // Lane-contiguous systems (equation i of lane l at i * row_stride + l). Returns false, with x
 // untouched, if some beta is negative or not finite or the rhs is not finite.
+// Image columns put every row of the W lanes in a page of its own (row_stride 4096 floats is
+// 16 KiB), and the hardware prefetchers do not cross pages: each row would wait for DRAM. So
+// the sweeps go in blocks of kAhead rows and ask for the next block's rows first (4096 x 4096
+// columns on 1 thread: float 58-68 -> 47-52 ms, double 123-126 -> 99-107 ms; 32 rows ahead
+// gained nothing more).
 template <class T, int W>
 bool diffusion_thomas_lanes(std::ptrdiff_t n, const real_t<T>* beta, const T* d, T* x,
                             std::ptrdiff_t row_stride, real_t<T>* work) {
+  constexpr std::ptrdiff_t kAhead = 16;
   DiffusionLanes<T, W> sweep(n, work);
-  sweep.forward(0, n, beta, d, row_stride);
+  for (std::ptrdiff_t begin = 0; begin < n; begin += kAhead) {
+    const std::ptrdiff_t end = std::min(n, begin + kAhead);
+    for (std::ptrdiff_t i = end; i < std::min(n, end + kAhead); ++i) {
+      prefetch_values(beta + i * row_stride, W);
+      prefetch_values(d + i * row_stride, W);
+    }
+    sweep.forward(begin, end, beta + begin * row_stride, row_stride, d + begin * row_stride,
+                  row_stride, 0);
+  }
   if (!sweep.healthy()) return false;
-  sweep.backward(0, n, x, row_stride);
+  for (std::ptrdiff_t begin = (n - 1) / kAhead * kAhead; begin >= 0; begin -= kAhead) {
+    for (std::ptrdiff_t i = std::max<std::ptrdiff_t>(0, begin - kAhead); i < begin; ++i)
+      prefetch_values(x + i * row_stride, W, true);
+    sweep.backward(begin, std::min(n, begin + kAhead), x + begin * row_stride, row_stride);
+  }
   return true;
 }
 
