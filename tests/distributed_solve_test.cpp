@@ -418,8 +418,10 @@ Deviation large_beta_deviation(const Problem<T>& p, const Slab<T>& slab) {
   return worst;
 }
 
-// The distributed diffusion form at conductances up to 1e7 (float) and 1e15 (double), every cut
-// of every size, against the subtraction-free reference. The diffusion matrix is an M-matrix
+// The distributed diffusion form at conductances up to 1e7 (float) and 1e15 (double), and near
+// max() (1e37, 1e307: two adjacent links still sum below it), every cut of every size, against
+// the subtraction-free reference. Near max() the pivots' inverses are near min(): with
+// subnormals flushed to zero, float at 1e36 erred by 1e4 eps, silently. The diffusion matrix is an M-matrix
 // whose rows sum to 1, so its inverse is non-negative with rows summing to 1: x is a convex
 // combination of d and lies in [min d, max d] (the maximum principle), and an elimination that
 // forms only sums and products of non-negative numbers keeps a few epsilon whatever beta is.
@@ -433,8 +435,9 @@ TYPED_TEST(DistributedSolve, DiffusionFormKeepsItsDigitsAtLargeBeta) {
   using T = TypeParam;
   constexpr long double eps = std::numeric_limits<T>::epsilon();
   const std::ptrdiff_t P = World().size;
-  const std::vector<double> scales = std::is_same_v<T, float> ? std::vector<double>{1e3, 1e5, 1e7}
-                                                              : std::vector<double>{1e3, 1e9, 1e15};
+  const std::vector<double> scales = std::is_same_v<T, float>
+                                         ? std::vector<double>{1e3, 1e5, 1e7, 1e37}
+                                         : std::vector<double>{1e3, 1e9, 1e15, 1e307};
   for (const bool periodic : {false, true})
     for (const double largest : scales)
       for (const std::ptrdiff_t n : {P, P + 1, std::ptrdiff_t(300)}) {
@@ -482,9 +485,9 @@ struct Setup {
   Problem<T> problem;
   std::vector<std::ptrdiff_t> rows;
   Slab<T> slab;
-  explicit Setup(std::ptrdiff_t rows_per_rank, bool diffusion = false)
+  explicit Setup(std::ptrdiff_t rows_per_rank, bool diffusion = false, bool periodic = false)
       : n(rows_per_rank * world.size),
-        problem(n, kCount, false, diffusion),
+        problem(n, kCount, periodic, diffusion),
         rows(slab_rows(n, world.size, Cut::Even)),
         slab(problem, first_row(rows, world.rank), rows[world.rank], true) {}
   // The rank where a failure is planted: rank 2 when there is one.
@@ -554,6 +557,21 @@ TYPED_TEST(DistributedSolve, NegativeConductanceOnOneRankIsNamedOnEveryRank) {
   EXPECT_EQ(error.argument(), "beta");
   EXPECT_EQ(error.system(), system);
   EXPECT_EQ(error.row(), row);
+}
+
+// The link that closes a periodic ring, beta[n-1] on the last rank, enters rank 0's first row:
+// rank 0's reduction fails first and must name it (it named an overflow at its row 0).
+TYPED_TEST(DistributedSolve, NonFiniteRingLinkIsNamedOnEveryRank) {
+  using T = TypeParam;
+  Setup<T> setup(3, true, true);
+  const std::ptrdiff_t system = 40;
+  if (setup.world.rank == setup.world.size - 1)
+    setup.slab.beta[setup.slab.layout.offset(system, 2)] = std::numeric_limits<T>::infinity();
+  const auto error =
+      expect_thrown<tridiff::InvalidArgument>([&] { solve_slab(setup.problem, setup.slab); });
+  EXPECT_EQ(error.argument(), "beta");
+  EXPECT_EQ(error.system(), system);
+  EXPECT_EQ(error.row(), setup.n - 1);
 }
 
 // Arguments refused on every rank, naming the argument, whichever rank got it wrong.

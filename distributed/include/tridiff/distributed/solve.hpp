@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -214,8 +215,12 @@ template <class T>
     if (!tridiff::detail::is_finite(rows.rhs(i, 0)))
       throw InvalidArgument("rhs", system, first + i, "is not finite");
   }
-  // The link into the first row is the previous rank's, which reports it; an overflow remains
-  // (of a pivot, for two links above max() / 2).
+  // The link into the first row is the previous rank's beta (the last rank's, into rank 0 of
+  // a periodic system): a lower rank's failure wins the agreement, so name it here too.
+  if (!std::isfinite(rows.link(-1, 0)))
+    throw InvalidArgument("beta", system, first > 0 ? first - 1 : plan.global_n - 1,
+                          "is not finite");
+  // An overflow remains (of a pivot, for two links above max() / 2).
   throw NumericalError(system, first,
                        "the reduction overflowed: beta or rhs is too large for this type");
 }
@@ -252,24 +257,31 @@ struct Workspace {
   // Per system, the boundary values of the finish: x_0 and x_{m-1} (general form), or the
   // previous rank's separator and this rank's (diffusion form).
   std::vector<T> first, last;
+  std::vector<char> keep_subnormals;  // per chunk (diffusion form: see its reduce_slab)
 };
 
 // Runs chunk(k, first, lanes, probe) on every chunk of W systems, shared by `threads`, and
-// returns the first system whose probe is not 0, or -1.
-template <class T, int W, class Chunk>
-std::ptrdiff_t for_each_chunk(std::ptrdiff_t count, int threads, Chunk&& chunk) {
+// returns the first system whose probe is not 0, or -1. Chunks run with subnormals flushed to
+// zero unless keep_subnormals(k) (subnormals.hpp): the general form's couplings a' decay
+// geometrically along the slab, and as subnormals every operation on them would cost ~100
+// cycles (the reduction of 4096 x 4096 floats took 658 ms, against 191 ms for tridiff::solve).
+template <class T, int W, class Keep, class Chunk>
+std::ptrdiff_t for_each_chunk(std::ptrdiff_t count, int threads, Keep&& keep_subnormals,
+                              Chunk&& chunk) {
   using R = real_t<T>;
   const std::ptrdiff_t chunks = (count + W - 1) / W;
   std::vector<std::ptrdiff_t> failed(chunks, -1);
 #pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1)
   for (std::ptrdiff_t k = 0; k < chunks; ++k) {
-    // The couplings decay geometrically along the slab: without this, far from the slab's
-    // first row they turn subnormal and every operation on them costs ~100 cycles (measured:
-    // the reduction of 4096 x 4096 floats took 658 ms, against 191 ms for tridiff::solve).
-    const tridiff::detail::SubnormalsAsZero flush;
     const std::ptrdiff_t first = k * W, lanes = std::min<std::ptrdiff_t>(W, count - first);
     R probe[W] = {};
-    chunk(k, first, lanes, probe);
+    if (keep_subnormals(k)) {
+      const tridiff::detail::SubnormalsKept state;
+      chunk(k, first, lanes, probe);
+    } else {
+      const tridiff::detail::SubnormalsAsZero state;
+      chunk(k, first, lanes, probe);
+    }
     for (std::ptrdiff_t l = 0; l < lanes && failed[k] < 0; ++l)
       if (probe[l] != R(0)) failed[k] = first + l;
   }
@@ -286,7 +298,7 @@ std::ptrdiff_t reduce_slab(const GeneralInputs<T>& in, const BatchLayout& layout
   const std::ptrdiff_t m = layout.n, r = plan.reduced_rows(plan.rank);
   const bool unit = layout.system_stride == 1;
   return for_each_chunk<T, W>(
-      layout.count, threads,
+      layout.count, threads, [](std::ptrdiff_t) { return false; },
       [&](std::ptrdiff_t k, std::ptrdiff_t first, std::ptrdiff_t lanes, real_t<T>* probe) {
         T* dp = work.eliminated.data() + 3 * m * W * k;
         T* ap = dp + m * W;
@@ -324,34 +336,55 @@ struct DiffusionKept {
 };
 
 // Step 1, diffusion form (diffusion_slab.hpp): reduce, pack the separator rows' numbers.
+// A chunk runs with subnormals flushed, unless one of its links reaches epsilon / min()
+// (1e31 in float, 1e292 in double): then it runs again, and finishes, with subnormals kept.
+// Below that, a value flushed (< min()) changes what a link multiplies it into by less than
+// epsilon against a pivot or leak >= 1; above, the pivots' inverses and the responses to the
+// separators are themselves near min() and matter (flushed, a link of 1e37 in float returned
+// x off by 1.3e-2 without an error). Kept throughout, a solution that decays into subnormals
+// would stick at the smallest one and cost a microcode assist per operation (4096 x 4096
+// floats with a step rhs at beta 10: 598 ms against 69 to reduce).
 template <class T, int W>
 std::ptrdiff_t reduce_slab(const DiffusionInputs<T>& in, const BatchLayout& layout,
                            const Plan& plan, int threads, Workspace<T>& work) {
+  using R = real_t<T>;
   constexpr int V = SlabEnds<T, W>::kValues;
+  constexpr R kFlushSafeLink = epsilon<T> / std::numeric_limits<R>::min();
   const std::ptrdiff_t m = layout.n;
   const bool unit = layout.system_stride == 1;
+  work.keep_subnormals.assign((layout.count + W - 1) / W, 0);
+  // One pass over chunk k; returns its largest link.
+  auto reduce = [&](std::ptrdiff_t k, std::ptrdiff_t first, std::ptrdiff_t lanes, R* probe) {
+    const DiffusionKept<T, W> kept(work.eliminated.data(), m, k);
+    T* out = work.send.data() + V * first;
+    R largest[W] = {};
+    if (lanes == W) {
+      SlabEnds<T, W> ends;
+      if (unit)
+        reduce_diffusion_lanes<T, W>(m, rows_at<true>(in, layout, first, plan), kept.y, kept.l,
+                                     kept.f, W, ends, probe, largest);
+      else
+        reduce_diffusion_lanes<T, W>(m, rows_at<false>(in, layout, first, plan), kept.y, kept.l,
+                                     kept.f, W, ends, probe, largest);
+      for (int l = 0; l < W; ++l) ends.pack(l, out + V * l);
+    } else {  // the tail of the batch, system by system in the same workspace format
+      for (std::ptrdiff_t l = 0; l < lanes; ++l) {
+        SlabEnds<T, 1> ends;
+        reduce_diffusion_lanes<T, 1>(m, rows_at<true>(in, layout, first + l, plan), kept.y + l,
+                                     kept.l + l, kept.f + l, W, ends, probe + l, largest + l);
+        ends.pack(0, out + V * l);
+      }
+    }
+    return *std::max_element(largest, largest + W);
+  };
   return for_each_chunk<T, W>(
-      layout.count, threads,
-      [&](std::ptrdiff_t k, std::ptrdiff_t first, std::ptrdiff_t lanes, real_t<T>* probe) {
-        const DiffusionKept<T, W> kept(work.eliminated.data(), m, k);
-        T* out = work.send.data() + V * first;
-        if (lanes == W) {
-          SlabEnds<T, W> ends;
-          if (unit)
-            reduce_diffusion_lanes<T, W>(m, rows_at<true>(in, layout, first, plan), kept.y, kept.l,
-                                         kept.f, W, ends, probe);
-          else
-            reduce_diffusion_lanes<T, W>(m, rows_at<false>(in, layout, first, plan), kept.y, kept.l,
-                                         kept.f, W, ends, probe);
-          for (int l = 0; l < W; ++l) ends.pack(l, out + V * l);
-        } else {  // the tail of the batch, system by system in the same workspace format
-          for (std::ptrdiff_t l = 0; l < lanes; ++l) {
-            SlabEnds<T, 1> ends;
-            reduce_diffusion_lanes<T, 1>(m, rows_at<true>(in, layout, first + l, plan), kept.y + l,
-                                         kept.l + l, kept.f + l, W, ends, probe + l);
-            ends.pack(0, out + V * l);
-          }
-        }
+      layout.count, threads, [](std::ptrdiff_t) { return false; },
+      [&](std::ptrdiff_t k, std::ptrdiff_t first, std::ptrdiff_t lanes, R* probe) {
+        if (!(reduce(k, first, lanes, probe) >= kFlushSafeLink)) return;  // NaN: probe says
+        work.keep_subnormals[k] = 1;
+        const tridiff::detail::SubnormalsKept state;
+        std::fill(probe, probe + W, R(0));
+        reduce(k, first, lanes, probe);
       });
 }
 
@@ -456,12 +489,12 @@ void solve_reduced(const DiffusionInputs<T>&, const Plan& plan, Workspace<T>& wo
 // probe) writes V lanes of chunk k from lane l on (V = W for a full chunk, 1 lane by lane for
 // the tail) through store(i, lane, value); first and last are the boundary values of its
 // systems (Workspace). Returns the first system whose solution is not finite, or -1.
-template <class T, int W, class Finish>
+template <class T, int W, class Keep, class Finish>
 std::ptrdiff_t finish_chunks(T* x, const BatchLayout& layout, int threads, const Workspace<T>& work,
-                             Finish&& finish) {
+                             Keep&& keep_subnormals, Finish&& finish) {
   const bool unit = layout.system_stride == 1;
   return for_each_chunk<T, W>(
-      layout.count, threads,
+      layout.count, threads, keep_subnormals,
       [&](std::ptrdiff_t k, std::ptrdiff_t first, std::ptrdiff_t lanes, real_t<T>* probe) {
         T* out = x + layout.offset(first, 0);
         const T* xf = work.first.data() + first;
@@ -487,13 +520,13 @@ template <class T, int W>
 std::ptrdiff_t finish_slab(const GeneralInputs<T>&, T* x, const BatchLayout& layout, int threads,
                            Workspace<T>& work) {
   const std::ptrdiff_t m = layout.n;
-  return finish_chunks<T, W>(x, layout, threads, work,
-                             [&]<int V>(std::ptrdiff_t k, std::ptrdiff_t l, const T* first,
-                                        const T* last, auto&& store, real_t<T>* probe) {
-                               const T* dp = work.eliminated.data() + 3 * m * W * k + l;
-                               finish_lanes<T, V>(m, dp, dp + m * W, dp + 2 * m * W, W, first, last,
-                                                  store, probe);
-                             });
+  return finish_chunks<T, W>(
+      x, layout, threads, work, [](std::ptrdiff_t) { return false; },
+      [&]<int V>(std::ptrdiff_t k, std::ptrdiff_t l, const T* first, const T* last, auto&& store,
+                 real_t<T>* probe) {
+        const T* dp = work.eliminated.data() + 3 * m * W * k + l;
+        finish_lanes<T, V>(m, dp, dp + m * W, dp + 2 * m * W, W, first, last, store, probe);
+      });
 }
 
 // Step 3, diffusion form: the slab's interior rows by back substitution from the separators.
@@ -501,13 +534,14 @@ template <class T, int W>
 std::ptrdiff_t finish_slab(const DiffusionInputs<T>&, T* x, const BatchLayout& layout, int threads,
                            Workspace<T>& work) {
   const std::ptrdiff_t m = layout.n;
-  return finish_chunks<T, W>(x, layout, threads, work,
-                             [&]<int V>(std::ptrdiff_t k, std::ptrdiff_t l, const T* left,
-                                        const T* own, auto&& store, real_t<T>* probe) {
-                               const DiffusionKept<T, W> kept(work.eliminated.data(), m, k);
-                               finish_diffusion_lanes<T, V>(m, kept.y + l, kept.l + l, kept.f + l,
-                                                            W, left, own, store, probe);
-                             });
+  return finish_chunks<T, W>(
+      x, layout, threads, work, [&](std::ptrdiff_t k) { return work.keep_subnormals[k] != 0; },
+      [&]<int V>(std::ptrdiff_t k, std::ptrdiff_t l, const T* left, const T* own, auto&& store,
+                 real_t<T>* probe) {
+        const DiffusionKept<T, W> kept(work.eliminated.data(), m, k);
+        finish_diffusion_lanes<T, V>(m, kept.y + l, kept.l + l, kept.f + l, W, left, own, store,
+                                     probe);
+      });
 }
 
 // The three steps and the two all-to-alls, with the ranks agreeing on any failure before the

@@ -18,6 +18,7 @@
 // row has an empty interior: its row is its separator.
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 
 #include "tridiff/solvers/detail/partitioned_diffusion.hpp"
@@ -66,16 +67,18 @@ void unpack_slab_ends(const T* in, std::ptrdiff_t q, const DiffusionPartEnds<T>&
 
 // Step 1 on a slab of m >= 1 rows of W systems (`rows`: DiffusionRows). Row i < m-1 is kept
 // at i * pitch + l in y, l and f. probe[l] stays 0 unless a beta is negative or a value is not
-// finite (or a pivot overflowed: links above max() / 2) in lane l.
+// finite (or a pivot overflowed: links above max() / 2) in lane l; largest[l] receives the
+// largest link of lane l (the one into the slab and the separator's included).
 template <class T, int W, class Rows>
 void reduce_diffusion_lanes(std::ptrdiff_t m, const Rows& rows, T* y, real_t<T>* l_kept,
                             real_t<T>* f, std::ptrdiff_t pitch, SlabEnds<T, W>& ends,
-                            real_t<T>* probe) {
+                            real_t<T>* probe, real_t<T>* largest) {
   using R = real_t<T>;
   R beta_left[W], beta_before[W], e_before[W], y_w[W], y_l[W], product[W], w_first[W];
   T y_u[W], u_first[W];
   for (int l = 0; l < W; ++l) {
     beta_left[l] = beta_before[l] = rows.link(-1, l);  // the previous rank's separator link
+    largest[l] = beta_left[l];
     e_before[l] = 1;
     y_u[l] = u_first[l] = T(0);
     y_w[l] = w_first[l] = 0;
@@ -85,9 +88,11 @@ void reduce_diffusion_lanes(std::ptrdiff_t m, const Rows& rows, T* y, real_t<T>*
   for (std::ptrdiff_t i = 0; i + 1 < m; ++i) {
 #pragma omp simd
     for (int l = 0; l < W; ++l) {
+      const R link = rows.link(i, l);
+      largest[l] = std::max(largest[l], link);
       f[i * pitch + l] = tridiff::detail::diffusion_reduce_row(
-          rows.link(i, l), rows.rhs(i, l), beta_left[l], beta_before[l], e_before[l], y_u[l],
-          y_w[l], y_l[l], product[l], u_first[l], w_first[l], probe[l]);
+          link, rows.rhs(i, l), beta_left[l], beta_before[l], e_before[l], y_u[l], y_w[l], y_l[l],
+          product[l], u_first[l], w_first[l], probe[l]);
       y[i * pitch + l] = y_u[l];
       l_kept[i * pitch + l] = y_l[l];
     }
@@ -95,6 +100,7 @@ void reduce_diffusion_lanes(std::ptrdiff_t m, const Rows& rows, T* y, real_t<T>*
   for (int l = 0; l < W; ++l) {
     const R separator_beta = rows.link(m - 1, l);
     const T separator_d = rows.rhs(m - 1, l);
+    largest[l] = std::max(largest[l], separator_beta);
     probe[l] += tridiff::detail::zero_if_finite(separator_beta) + rows.flaw(m - 1, l) +
                 tridiff::detail::zero_if_finite(separator_d);
     ends.u_first[l] = u_first[l];
