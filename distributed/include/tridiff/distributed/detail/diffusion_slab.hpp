@@ -75,8 +75,10 @@ void reduce_diffusion_lanes(std::ptrdiff_t m, const Rows& rows, T* y, real_t<T>*
                             real_t<T>* probe, real_t<T>* largest) {
   using R = real_t<T>;
   R beta_left[W], beta_before[W], e_before[W], y_w[W], y_l[W], product[W], w_first[W];
+  R flaws[W];  // a local, not probe, which the stores of the kept rows could alias
   T y_u[W], u_first[W];
   for (int l = 0; l < W; ++l) {
+    flaws[l] = 0;
     beta_left[l] = beta_before[l] = rows.link(-1, l);  // the previous rank's separator link
     largest[l] = beta_left[l];
     e_before[l] = 1;
@@ -92,7 +94,7 @@ void reduce_diffusion_lanes(std::ptrdiff_t m, const Rows& rows, T* y, real_t<T>*
       largest[l] = std::max(largest[l], link);
       f[i * pitch + l] = tridiff::detail::diffusion_reduce_row(
           link, rows.rhs(i, l), beta_left[l], beta_before[l], e_before[l], y_u[l], y_w[l], y_l[l],
-          product[l], u_first[l], w_first[l], probe[l]);
+          product[l], u_first[l], w_first[l], flaws[l]);
       y[i * pitch + l] = y_u[l];
       l_kept[i * pitch + l] = y_l[l];
     }
@@ -101,7 +103,7 @@ void reduce_diffusion_lanes(std::ptrdiff_t m, const Rows& rows, T* y, real_t<T>*
     const R separator_beta = rows.link(m - 1, l);
     const T separator_d = rows.rhs(m - 1, l);
     largest[l] = std::max(largest[l], separator_beta);
-    probe[l] += tridiff::detail::zero_if_finite(separator_beta) + rows.flaw(m - 1, l) +
+    probe[l] += flaws[l] + tridiff::detail::zero_if_finite(separator_beta) + rows.flaw(m - 1, l) +
                 tridiff::detail::zero_if_finite(separator_d);
     ends.u_first[l] = u_first[l];
     ends.w_first[l] = w_first[l];
@@ -122,21 +124,25 @@ template <class T, int W, class Store>
 void finish_diffusion_lanes(std::ptrdiff_t m, const T* y, const real_t<T>* l_kept,
                             const real_t<T>* f, std::ptrdiff_t pitch, const T* left, const T* own,
                             Store&& store, real_t<T>* probe) {
-  T below[W];
+  // Locals, not the caller's arrays, which the stores through `store` could alias.
+  T below[W], x_left[W];
+  real_t<T> finite[W];
   for (int l = 0; l < W; ++l) {
     below[l] = own[l];
+    x_left[l] = left[l];
+    finite[l] = tridiff::detail::zero_if_finite(own[l]);
     store(m - 1, l, own[l]);
   }
   for (std::ptrdiff_t i = m - 2; i >= 0; --i) {
 #pragma omp simd
     for (int l = 0; l < W; ++l) {
       const std::ptrdiff_t at = i * pitch + l;
-      below[l] = y[at] + l_kept[at] * left[l] + f[at] * below[l];
+      below[l] = y[at] + l_kept[at] * x_left[l] + f[at] * below[l];
       store(i, l, below[l]);
-      probe[l] += tridiff::detail::zero_if_finite(below[l]);
+      finite[l] += tridiff::detail::zero_if_finite(below[l]);
     }
   }
-  for (int l = 0; l < W; ++l) probe[l] += tridiff::detail::zero_if_finite(below[l]);
+  for (int l = 0; l < W; ++l) probe[l] += finite[l];
 }
 
 }  // namespace tridiff::distributed::detail
