@@ -11,12 +11,14 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
 
 #include "reference.hpp"
 #include "tridiff/distributed/solve.hpp"
+#include "tridiff/solvers/detail/subnormals.hpp"
 #include "tridiff/solvers.hpp"
 
 namespace {
@@ -421,8 +423,9 @@ Deviation large_beta_deviation(const Problem<T>& p, const Slab<T>& slab) {
 // The distributed diffusion form at conductances up to 1e7 (float) and 1e15 (double), and near
 // max() (1e37, 1e307: two adjacent links still sum below it), every cut of every size, against
 // the subtraction-free reference. Near max() the pivots' inverses are near min(): with
-// subnormals flushed to zero, float at 1e36 erred by 1e4 eps, silently. The diffusion matrix is an M-matrix
-// whose rows sum to 1, so its inverse is non-negative with rows summing to 1: x is a convex
+// subnormals flushed to zero, float at 1e36 erred by 1e4 eps, silently; with the caller
+// flushing, the separators' solve did so too. The diffusion matrix is an M-matrix whose rows
+// sum to 1, so its inverse is non-negative with rows summing to 1: x is a convex
 // combination of d and lies in [min d, max d] (the maximum principle), and an elimination that
 // forms only sums and products of non-negative numbers keeps a few epsilon whatever beta is.
 // The single-process solve_diffusion, subtraction-free, measured on such systems (n from 200 to
@@ -440,16 +443,23 @@ TYPED_TEST(DistributedSolve, DiffusionFormKeepsItsDigitsAtLargeBeta) {
                                          : std::vector<double>{1e3, 1e9, 1e15, 1e307};
   for (const bool periodic : {false, true})
     for (const double largest : scales)
-      for (const std::ptrdiff_t n : {P, P + 1, std::ptrdiff_t(300)}) {
-        SCOPED_TRACE(::testing::Message()
-                     << "beta up to " << largest << (periodic ? ", periodic" : ""));
-        const Problem<T> problem = large_beta_problem<T>(n, largest, periodic);
-        solve_every_cut(problem, [&](const Slab<T>& slab) {
-          const Deviation deviation = large_beta_deviation(problem, slab);
-          EXPECT_LE(deviation.error, 32 * eps * std::log2(2.0L * n));
-          EXPECT_LE(deviation.outside, 16 * eps);
-        });
-      }
+      for (const std::ptrdiff_t n : {P, P + 1, std::ptrdiff_t(300)})
+        // Near max() also with the caller flushing subnormals (-ffast-math): the solve must
+        // keep them where they matter, whatever the caller's state.
+        for (const bool caller_flushes : {false, true}) {
+          if (caller_flushes && largest < 1e30) continue;
+          SCOPED_TRACE(::testing::Message()
+                       << "beta up to " << largest << (periodic ? ", periodic" : "")
+                       << (caller_flushes ? ", caller flushes" : ""));
+          const Problem<T> problem = large_beta_problem<T>(n, largest, periodic);
+          std::optional<tridiff::detail::SubnormalsAsZero> flushing;
+          if (caller_flushes) flushing.emplace();
+          solve_every_cut(problem, [&](const Slab<T>& slab) {
+            const Deviation deviation = large_beta_deviation(problem, slab);
+            EXPECT_LE(deviation.error, 32 * eps * std::log2(2.0L * n));
+            EXPECT_LE(deviation.outside, 16 * eps);
+          });
+        }
 }
 
 // ---- Failures: found on one rank, thrown on every rank. ----

@@ -463,6 +463,9 @@ void solve_reduced(const GeneralInputs<T>&, const Plan& plan, Workspace<T>& work
 template <class T>
 void solve_reduced(const DiffusionInputs<T>&, const Plan& plan, Workspace<T>& work) {
   using R = real_t<T>;
+  // The separators' rows carry the values near min() that huge links multiply (see the
+  // reduction): they must not be flushed, whatever the caller's state (-ffast-math).
+  const tridiff::detail::SubnormalsKept gradual_underflow;
   constexpr int V = DiffusionPartEnds<T>::kArrays;
   const std::ptrdiff_t begin = plan.block_begin(plan.rank);
   const std::ptrdiff_t systems = plan.block_begin(plan.rank + 1) - begin, P = plan.size;

@@ -411,7 +411,7 @@ inline void prefetch_values(const V* p, std::ptrdiff_t count, bool write = false
 // Image columns put every row of the W lanes in a page of its own (row_stride 4096 floats is
 // 16 KiB), and the hardware prefetchers do not cross pages: each row would wait for DRAM. So
 // the sweeps go in blocks of kAhead rows and ask for the next block's rows first (4096 x 4096
-// columns on 1 thread: float 58-68 -> 47-52 ms, double 123-126 -> 99-107 ms; 32 rows ahead
+// columns on 1 thread: float 53-60 -> 42-48 ms, double 122-126 -> 99-107 ms; 32 rows ahead
 // gained nothing more).
 template <class T, int W>
 bool diffusion_thomas_lanes(std::ptrdiff_t n, const real_t<T>* beta, const T* d, T* x,
