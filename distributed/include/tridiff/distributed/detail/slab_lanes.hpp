@@ -90,15 +90,9 @@ void reduce_lanes(std::ptrdiff_t m, const Rows& rows, T* dp, T* ap, T* cp, std::
                   real_t<T>* probe) {
   using R = real_t<T>;
   const R tolerance = kVanishingPivot * epsilon<T>;
-  // Summed in a local, not in probe, which the stores of the rows could alias (the compiler
-  // would reload it every row); added to probe on every way out.
+  // The forward sweep sums its flaws in a local, not in probe, which the stores of the rows
+  // could alias (the compiler would reload it every row).
   R flaws[W] = {};
-  struct AddOnReturn {
-    R *to, *from;
-    ~AddOnReturn() {
-      for (int l = 0; l < W; ++l) to[l] += from[l];
-    }
-  } add{probe, flaws};
   // The first two rows are only normalised: neither has a row above it within the slab.
   for (std::ptrdiff_t i = 0; i < std::min<std::ptrdiff_t>(m, 2); ++i) {
     T* d = dp + i * pitch;
@@ -134,6 +128,7 @@ void reduce_lanes(std::ptrdiff_t m, const Rows& rows, T* dp, T* ap, T* cp, std::
       flaws[l] += (vanished ? R(1) : R(0)) + magnitude(d[l] + a[l] + c[l]) * 0 + rows.flaw(i, l);
     }
   }
+  for (int l = 0; l < W; ++l) probe[l] += flaws[l];
   if (m < 3) return;
   // Backward, rows m-3 .. 1: row i + 1 through x_0 and x_{m-1} (row m-2 already reads so).
   T below_d[W], below_a[W], below_c[W];
@@ -157,7 +152,7 @@ void reduce_lanes(std::ptrdiff_t m, const Rows& rows, T* dp, T* ap, T* cp, std::
     const T pivot = tridiff::detail::modified_close_first_row(below_a[l], below_c[l], below_d[l],
                                                               ap[l], cp[l], dp[l], product);
     const bool vanished = !(magnitude(pivot) > tolerance * (1 + magnitude(product)));
-    flaws[l] += (vanished ? R(1) : R(0)) + magnitude(dp[l] + ap[l] + cp[l]) * 0;
+    probe[l] += (vanished ? R(1) : R(0)) + magnitude(dp[l] + ap[l] + cp[l]) * 0;
   }
 }
 
