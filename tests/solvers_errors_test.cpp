@@ -689,11 +689,16 @@ TYPED_TEST(SolverErrors, AutoSolvesNonDominantMatrix) {
 // (blocks of 32 columns), system 5 is dominant by columns only (row 40 is not), which Thomas
 // accepts, and system kLanes + 3 is dominant neither way at row 33: Thomas refuses that one
 // alone, leaving its rhs as it was in place and solving every other system; Auto pivots it.
-TYPED_TEST(SolverErrors, DominanceIsJudgedPerSystemInFullChunksOfRows) {
-  using T = TypeParam;
+// In full chunks of image rows (thomas_rows) and of interleaved columns (thomas_lanes), the
+// dominance test fused into the sweep judges each lane on its own: one system dominant only by
+// columns is solved, one dominant neither way is refused by Thomas (naming its row) and
+// pivoted by Auto, and the other lanes of their chunks are solved. Thomas runs in place (the
+// columns then go through a copy) and into a separate x (columns solved where they lie).
+template <class T>
+void expect_dominance_judged_per_system(Kind kind) {
   constexpr std::ptrdiff_t n = 70, lanes = detail::kLanes<T>;
   const std::ptrdiff_t count = 2 * lanes + 3, by_columns = 5, refused = lanes + 3;
-  auto batch = valid_batch<T>(n, count);
+  auto batch = valid_batch<T>(n, count, kind);
   for (std::ptrdiff_t i = 0; i < n; ++i) {  // [1 4 1] rows, then row 40 made 3 4 3
     batch.at(batch.a, by_columns, i) = T(i > 0 ? 1 : 0);
     batch.at(batch.b, by_columns, i) = T(4);
@@ -736,6 +741,17 @@ TYPED_TEST(SolverErrors, DominanceIsJudgedPerSystemInFullChunksOfRows) {
         EXPECT_EQ(std::memcmp(&rhs[o], &batch.d[o], sizeof(T)), 0) << "rhs row " << i;
       }
     }
+    std::vector<T> separate(batch.d.size());
+    try {
+      solve(batch.a.data(), batch.b.data(), batch.c.data(), batch.d.data(), separate.data(),
+            batch.layout, with(Method::Thomas, threads));
+      ADD_FAILURE() << "Thomas accepted system " << refused << " (separate x)";
+    } catch (const NumericalError& e) {
+      EXPECT_EQ(e.system(), refused) << e.what();
+      EXPECT_EQ(e.row(), 33) << e.what();
+    }
+    for (std::ptrdiff_t s = 0; s < count; ++s)
+      if (s != refused) expect_solved(separate, s);
     SolveReport report;
     std::vector<T> x(batch.d.size());
     ASSERT_NO_THROW(report = solve(batch.a.data(), batch.b.data(), batch.c.data(), batch.d.data(),
@@ -743,6 +759,14 @@ TYPED_TEST(SolverErrors, DominanceIsJudgedPerSystemInFullChunksOfRows) {
     EXPECT_EQ(report.pivoted_systems, 1);
     for (std::ptrdiff_t s = 0; s < count; ++s) expect_solved(x, s);
   }
+}
+
+TYPED_TEST(SolverErrors, DominanceIsJudgedPerSystemInFullChunksOfRows) {
+  expect_dominance_judged_per_system<TypeParam>(Kind::Rows);
+}
+
+TYPED_TEST(SolverErrors, DominanceIsJudgedPerSystemInFullChunksOfColumns) {
+  expect_dominance_judged_per_system<TypeParam>(Kind::Columns);
 }
 
 // Dominance compares moduli, not LAPACK's |re| + |im|: rows b = 2 + 2i, a = c = 1.9 are

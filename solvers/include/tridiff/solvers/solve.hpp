@@ -557,19 +557,17 @@ SolveReport solve_single(const SystemView<T>& view, Strided<T> x, Method method,
 // columns) are solved where they lie; other layouts, partial chunks and in-place solves go
 // through a lane-contiguous slab, so that a failed in-place solve leaves rhs intact. (Full
 // chunks of image rows go to solve_rows instead.)
-// With `check`, the lanes are first checked for finite, dominant matrices. Returns false if
-// some lane failed the check or broke down: the caller then goes system by system.
+// With `check`, the lanes are also checked for finite, dominant matrices, in the sweep. Returns
+// false if some lane failed the check or broke down: the caller then goes system by system.
 template <class T>
 bool solve_lanes(const T* a, const T* b, const T* c, const T* d, T* x, const BatchLayout& layout,
                  std::ptrdiff_t first, std::ptrdiff_t systems, bool check, Scratch<T>& scratch) {
   constexpr int W = kLanes<T>;
   const std::ptrdiff_t n = layout.n, o = layout.offset(first, 0);
+  const auto solve = check ? thomas_lanes<T, W, true> : thomas_lanes<T, W, false>;
   if (layout.system_stride == 1 && systems == W && x != d) {
-    if (check && !lanes_finite_and_dominant<T, W>(n, a + o, b + o, c + o, layout.row_stride))
-      return false;
     scratch.work.resize(n * W);
-    return thomas_lanes<T, W>(n, a + o, b + o, c + o, d + o, x + o, layout.row_stride,
-                              scratch.work.data());
+    return solve(n, a + o, b + o, c + o, d + o, x + o, layout.row_stride, scratch.work.data());
   }
   scratch.slab.resize(6 * n * W);
   T* sa = scratch.slab.data();
@@ -582,8 +580,7 @@ bool solve_lanes(const T* a, const T* b, const T* c, const T* d, T* x, const Bat
   gather<T, W>(b, layout, first, lanes, T(1), sb);
   gather<T, W>(c, layout, first, lanes, T(0), sc);
   gather<T, W>(d, layout, first, lanes, T(0), sd);
-  if (check && !lanes_finite_and_dominant<T, W>(n, sa, sb, sc, W)) return false;
-  if (!thomas_lanes<T, W>(n, sa, sb, sc, sd, sd, W, sw)) return false;
+  if (!solve(n, sa, sb, sc, sd, sd, W, sw)) return false;
   scatter<T, W>(sd, layout, first, lanes, x);
   return true;
 }

@@ -70,8 +70,8 @@ void require_finite_rhs(const SystemView<T>& s, std::ptrdiff_t system) {
 // Diagonal dominance of rows [begin, end): the first row that is not dominant, and whether
 // every column of the range is. A matrix is safe for the pivot-free methods if it is dominant
 // by rows or by columns (weakly, with a few ulps of slack for rounding in the caller's own
-// arithmetic). The vectorised tests (dominance's first pass, lanes_finite_and_dominant, the
-// checks fused into thomas_rows and reduce_part_group) compare without that slack: what they
+// arithmetic). The vectorised tests (dominance's first pass, the checks fused into
+// thomas_lanes, thomas_rows and reduce_part_group) compare without that slack: what they
 // accept, this exact scan accepts too, and what they refuse goes to it.
 struct Dominance {
   std::ptrdiff_t first_row_failure = -1;
@@ -134,37 +134,6 @@ Dominance dominance(const SystemView<T>& s, std::ptrdiff_t begin, std::ptrdiff_t
   if (row_failures > 0 || column_failures > 0) result.merge(dominance_by_row(s, first, last));
   if (last < end) result.merge(dominance_by_row(s, std::max(begin, last), end));
   return result;
-}
-
-// The same test on W systems at once, lane-contiguous as in thomas_lanes (equation i of lane l
-// at i * row_stride + l), so that interleaved systems are checked with vector loads instead of
-// one strided walk per system. True if every lane is finite and dominant by rows or by
-// columns; otherwise the caller checks the systems one by one to name the culprit.
-template <class T, int W>
-bool lanes_finite_and_dominant(std::ptrdiff_t n, const T* a, const T* b, const T* c,
-                               std::ptrdiff_t row_stride) {
-  using R = real_t<T>;
-  R probe[W], row_failure[W], column_failure[W];
-  for (int l = 0; l < W; ++l) probe[l] = row_failure[l] = column_failure[l] = 0;
-  for (std::ptrdiff_t i = 0; i < n; ++i) {
-    const std::ptrdiff_t row = i * row_stride;
-    const bool left = i > 0, right = i + 1 < n;
-#pragma omp simd
-    for (int l = 0; l < W; ++l) {
-      const R diagonal = modulus(b[row + l]);
-      const R sub = left ? modulus(a[row + l]) : R(0);
-      const R super = right ? modulus(c[row + l]) : R(0);
-      const R above = left ? modulus(c[row - row_stride + l]) : R(0);
-      const R below = right ? modulus(a[row + row_stride + l]) : R(0);
-      row_failure[l] = std::max(row_failure[l], R(diagonal < sub + super));
-      column_failure[l] = std::max(column_failure[l], R(diagonal < above + below));
-      probe[l] += (diagonal + sub + super) * 0;
-    }
-  }
-  bool ok = true;
-  for (int l = 0; l < W; ++l)
-    ok = ok && probe[l] == 0 && (row_failure[l] == 0 || column_failure[l] == 0);
-  return ok;
 }
 
 // -1 if the matrix is dominant by rows or by columns; otherwise the first row that is not.

@@ -398,14 +398,6 @@ class DiffusionLanes {
   T carry_[Rhs][W];  // forward: d'_{i-1}; backward: x_{i+1}
 };
 
-// Asks for the cache lines of `count` consecutive values at p (for writing if `write`).
-template <class V>
-inline void prefetch_values(const V* p, std::ptrdiff_t count, bool write = false) {
-  constexpr std::ptrdiff_t kLine = 64 / sizeof(V) > 0 ? 64 / sizeof(V) : 1;
-  for (std::ptrdiff_t k = 0; k < count; k += kLine)
-    write ? __builtin_prefetch(p + k, 1) : __builtin_prefetch(p + k, 0);
-}
-
 // Lane-contiguous systems (equation i of lane l at i * row_stride + l). Returns false, with x
 // untouched, if some beta is negative or not finite or the rhs is not finite.
 // Image columns put every row of the W lanes in a page of its own (row_stride 4096 floats is

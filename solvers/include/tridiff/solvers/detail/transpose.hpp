@@ -107,6 +107,14 @@ inline __mmask16 first_columns(std::ptrdiff_t columns) {
 }
 #endif
 
+// Asks for the cache lines of `count` consecutive values at p (for writing if `write`).
+template <class V>
+inline void prefetch_values(const V* p, std::ptrdiff_t count, bool write = false) {
+  constexpr std::ptrdiff_t kLine = 64 / sizeof(V) > 0 ? 64 / sizeof(V) : 1;
+  for (std::ptrdiff_t k = 0; k < count; k += kLine)
+    write ? __builtin_prefetch(p + k, 1) : __builtin_prefetch(p + k, 0);
+}
+
 // block[k * W + l] = rows[l][x + k] for k < columns, l < W: W rows anywhere in memory (a band
 // of image rows, with a spare row standing in for rows past the image). W rows read side by
 // side, 64 bytes of each at a time, are more streams than the hardware prefetchers follow, so
