@@ -684,12 +684,10 @@ TYPED_TEST(SolverErrors, AutoSolvesNonDominantMatrix) {
   }
 }
 
-// Dominance is judged per system inside full chunks of lanes too (image rows: the check runs
-// inside the rows kernel's forward sweep). Among 2 chunks and a tail of rows of 70 unknowns
-// (blocks of 32 columns), system 5 is dominant by columns only (row 40 is not), which Thomas
-// accepts, and system kLanes + 3 is dominant neither way at row 33: Thomas refuses that one
-// alone, leaving its rhs as it was in place and solving every other system; Auto pivots it.
-// In full chunks of image rows (thomas_rows) and of interleaved columns (thomas_lanes), the
+// Among 2 chunks and a tail of systems of 70 unknowns, system 5 is dominant by columns only
+// (row 40 is not), which Thomas accepts, and system kLanes + 3 is dominant neither way at row
+// 33: Thomas refuses that one alone, leaving its rhs as it was in place and solving every other
+// system; Auto pivots it. In full chunks of image rows (thomas_rows) and of interleaved columns (thomas_lanes), the
 // dominance test fused into the sweep judges each lane on its own: one system dominant only by
 // columns is solved, one dominant neither way is refused by Thomas (naming its row) and
 // pivoted by Auto, and the other lanes of their chunks are solved. Thomas runs in place (the
@@ -767,6 +765,59 @@ TYPED_TEST(SolverErrors, DominanceIsJudgedPerSystemInFullChunksOfRows) {
 
 TYPED_TEST(SolverErrors, DominanceIsJudgedPerSystemInFullChunksOfColumns) {
   expect_dominance_judged_per_system<TypeParam>(Kind::Columns);
+}
+
+// The check inside the columns kernel at its edges: one full chunk of n = 1, 2, 3 and 5
+// unknowns, one system whose only flaw is its last row and column (b = 1/4 under a = c = 1),
+// and NaN in every a[0] and c[n-1], which lie outside the matrices and must not be read.
+// Thomas refuses that system at row n-1, in place and into a separate x; Auto pivots it; every
+// other system is solved.
+TYPED_TEST(SolverErrors, ColumnsKernelJudgesTheLastRowAndReadsNoEntryOutsideTheMatrix) {
+  using T = TypeParam;
+  constexpr std::ptrdiff_t lanes = detail::kLanes<T>, refused = 7;
+  const T nan = T(std::numeric_limits<real_t<T>>::quiet_NaN());
+  for (std::ptrdiff_t n : {1, 2, 3, 5}) {
+    SCOPED_TRACE(::testing::Message() << "n = " << n);
+    auto batch = valid_batch<T>(n, lanes, Kind::Columns);
+    if (n > 1) {
+      batch.at(batch.b, refused, n - 1) = T(0.25);
+      batch.at(batch.a, refused, n - 1) = T(1);
+      batch.at(batch.c, refused, n - 2) = T(1);
+    }
+    auto poisoned = batch;
+    for (std::ptrdiff_t s = 0; s < lanes; ++s) {
+      poisoned.at(poisoned.a, s, 0) = nan;
+      poisoned.at(poisoned.c, s, n - 1) = nan;
+    }
+    const long double bound = 16 * unit_roundoff<T>();
+    auto expect_solved = [&](const std::vector<T>& x, std::ptrdiff_t s) {
+      std::vector<T> xs;
+      for (std::ptrdiff_t i = 0; i < n; ++i) xs.push_back(x[batch.layout.offset(s, i)]);
+      EXPECT_LE(backward_error(system_of(batch, s), xs), bound) << "system " << s;
+    };
+    for (bool in_place : {false, true}) {
+      SCOPED_TRACE(in_place ? "in place" : "separate x");
+      std::vector<T> x(batch.d.size());
+      if (in_place) x = batch.d;
+      auto call = [&] {
+        solve(poisoned.a.data(), poisoned.b.data(), poisoned.c.data(),
+              in_place ? x.data() : batch.d.data(), x.data(), batch.layout, with(Method::Thomas));
+      };
+      if (n > 1) {
+        expect_numerical_error(call, refused, n - 1, n);
+      } else {
+        ASSERT_NO_THROW(call());
+      }
+      for (std::ptrdiff_t s = 0; s < lanes; ++s)
+        if (s != refused || n == 1) expect_solved(x, s);
+    }
+    std::vector<T> x(batch.d.size());
+    SolveReport report;
+    ASSERT_NO_THROW(report = solve(poisoned.a.data(), poisoned.b.data(), poisoned.c.data(),
+                                   batch.d.data(), x.data(), batch.layout, with(Method::Auto)));
+    EXPECT_EQ(report.pivoted_systems, n > 1 ? 1 : 0);
+    for (std::ptrdiff_t s = 0; s < lanes; ++s) expect_solved(x, s);
+  }
 }
 
 // Dominance compares moduli, not LAPACK's |re| + |im|: rows b = 2 + 2i, a = c = 1.9 are
