@@ -215,7 +215,7 @@ class DiffusionLanes {
       const bool has_link = i + 1 < n_;  // beta[n-1] is not part of the system
       R* w = multipliers_ + i * W;
       T* e = e_out + (i - begin) * e_stride;
-#pragma omp simd
+#pragma omp simd simdlen(kLoopWidth <T, W>)
       for (int l = 0; l < W; ++l) {
         const R beta_here = has_link ? b[l] : R(0);
         const R g = 1 + beta_before[l] * e_before[l];
@@ -277,7 +277,7 @@ class DiffusionLanes {
       const T* e = e_in + (i - begin) * e_stride;
       T* out = x + (i - begin) * stride;
       const bool last = i == n_ - 1;
-#pragma omp simd
+#pragma omp simd simdlen(kLoopWidth <T, W>)
       for (int l = 0; l < W; ++l)
         for (int c = 0; c < Rhs; ++c) {
           carry[c][l] =

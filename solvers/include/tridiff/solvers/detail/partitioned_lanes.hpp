@@ -163,7 +163,7 @@ bool reduce_part_group(const PartGroup<T, W>& group, std::ptrdiff_t rows, T* wor
       const T* c = block[2] + (j - j0) * W;
       const T* d = block[3] + (j - j0) * W;
       if (j == 0) {
-#pragma omp simd
+#pragma omp simd simdlen(kLoopWidth <T, W>)
         for (int l = 0; l < W; ++l) {
           modified_first_row(a[l], b[l], c[l], d[l], first_a[l], first_c[l], first_d[l]);
           margin[l] = magnitude(b[l]) * (1 - tolerance);
@@ -185,7 +185,7 @@ bool reduce_part_group(const PartGroup<T, W>& group, std::ptrdiff_t rows, T* wor
       T* ka = kept_a + j * W;
       T* kc = kept_c + j * W;
       T* kd = kept_d + j * W;
-#pragma omp simd
+#pragma omp simd simdlen(kLoopWidth <T, W>)
       for (int l = 0; l < W; ++l) {
         T eliminated;
         const T pivot = modified_forward_row(a[l], b[l], c[l], d[l], previous_a[l], previous_c[l],
@@ -226,12 +226,12 @@ bool reduce_part_group(const PartGroup<T, W>& group, std::ptrdiff_t rows, T* wor
     const T* ka = kept_a + j * W;
     const T* kc = kept_c + j * W;
     const T* kd = kept_d + j * W;
-#pragma omp simd
+#pragma omp simd simdlen(kLoopWidth <T, W>)
     for (int l = 0; l < W; ++l)
       modified_backward_row(ka[l], kc[l], kd[l], next_a[l], next_c[l], next_d[l]);
   }
   const std::ptrdiff_t base = 2 * group.first_part;
-#pragma omp simd
+#pragma omp simd simdlen(kLoopWidth <T, W>)
   for (int l = 0; l < W; ++l) {
     // Row 0 with x_{s+1} substituted from row 1.
     T coupling;
@@ -304,7 +304,7 @@ bool finish_part_group(const PartGroup<T, W>& group, std::ptrdiff_t rows, T* wor
       T* kc = kept_c + j * W;
       T* kd = kept_d + j * W;
       // The pivots are those of step 1 (the same elimination from row 1), already checked.
-#pragma omp simd
+#pragma omp simd simdlen(kLoopWidth <T, W>)
       for (int l = 0; l < W; ++l) {
         const T inverse = T(1) / (b[l] - a[l] * previous_c[l]);
         previous_c[l] = c[l] * inverse;
@@ -323,7 +323,7 @@ bool finish_part_group(const PartGroup<T, W>& group, std::ptrdiff_t rows, T* wor
       const T* kc = kept_c + j * W;
       const T* kd = kept_d + j * W;
       T* out = solution + (j - j0) * W;
-#pragma omp simd
+#pragma omp simd simdlen(kLoopWidth <T, W>)
       for (int l = 0; l < W; ++l) {
         next[l] = kd[l] - kc[l] * next[l];
         out[l] = next[l];

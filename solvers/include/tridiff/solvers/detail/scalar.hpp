@@ -56,6 +56,22 @@ inline bool is_finite(const T& x) {
     return std::isfinite(x);
 }
 
+// Scalars in one 64-byte vector: the width a kernel's lane loops ask for with
+// `#pragma omp simd simdlen(...)`. GCC 12 with -march=native uses 256-bit vectors on AVX-512
+// CPUs unless told otherwise, and a build-wide -mprefer-vector-width=512 slowed the image
+// kernels (the DOF default, 4K on 2 threads: 299 -> 358 ms); so only the kernels measured
+// faster with 512 bits ask for them (docs/performance.md).
+template <class T>
+inline constexpr int kVectorWidth = static_cast<int>(64 / sizeof(T) > 0 ? 64 / sizeof(T) : 1);
+
+// The width for a loop over W lanes that gains from 512 bits only when W spans several of
+// them (measured: the diffusion kernel on 64 lanes of columns 1.16x faster, on the rows' 16
+// lanes 0.9x): one vector of 64 bytes then, else GCC's own choice of half of it.
+template <class T, int W>
+inline constexpr int kLoopWidth = W > kVectorWidth<T>       ? kVectorWidth<T>
+                                  : kVectorWidth<T> / 2 > 0 ? kVectorWidth<T> / 2
+                                                            : 1;
+
 template <class T>
 inline constexpr real_t<T> epsilon = std::numeric_limits<real_t<T>>::epsilon();
 
