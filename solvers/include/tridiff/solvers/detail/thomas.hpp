@@ -81,7 +81,7 @@ bool thomas_lanes(std::ptrdiff_t n, const T* a, const T* b, const T* c, const T*
     }
     T* w = work + i * W;
     const bool last = i == n - 1;
-#pragma omp simd
+#pragma omp simd simdlen(kLoopWidth <T, W>)
     for (int l = 0; l < W; ++l) {
       const T xi = (d[row + l] - (i == 0 ? T(0) : a[row + l] * previous_x[l])) * inverse[l];
       x[row + l] = xi;
@@ -89,7 +89,7 @@ bool thomas_lanes(std::ptrdiff_t n, const T* a, const T* b, const T* c, const T*
       probe[l] += magnitude(xi) * 0;
     }
     if (last) break;
-#pragma omp simd
+#pragma omp simd simdlen(kLoopWidth <T, W>)
     for (int l = 0; l < W; ++l) {
       w[l] = c[row + l] * inverse[l];
       const T eliminated = a[next + l] * w[l];
@@ -124,7 +124,7 @@ bool thomas_lanes(std::ptrdiff_t n, const T* a, const T* b, const T* c, const T*
     const std::ptrdiff_t row = i * row_stride;
     if (i >= kAhead) prefetch_values(x + row - kAhead * row_stride, W, true);
     const T* w = work + i * W;
-#pragma omp simd
+#pragma omp simd simdlen(kLoopWidth <T, W>)
     for (int l = 0; l < W; ++l) {
       const T xi = x[row + l] - w[l] * x[row + row_stride + l];
       x[row + l] = xi;
