@@ -70,10 +70,11 @@ void unpack_slab_ends(const T* in, std::ptrdiff_t q, const DiffusionPartEnds<T>&
 // finite (or a pivot overflowed: links above max() / 2) in lane l; largest[l] receives the
 // largest link of lane l (the one into the slab and the separator's included).
 template <class T, int W, class Rows>
-void reduce_diffusion_lanes(std::ptrdiff_t m, const Rows& rows, T* y, real_t<T>* l_kept,
+void reduce_diffusion_lanes(std::ptrdiff_t m, const Rows& rows_in, T* y, real_t<T>* l_kept,
                             real_t<T>* f, std::ptrdiff_t pitch, SlabEnds<T, W>& ends,
                             real_t<T>* probe, real_t<T>* largest) {
   using R = real_t<T>;
+  const Rows rows = rows_in;  // a local copy, as in reduce_lanes (slab_lanes.hpp)
   R beta_left[W], beta_before[W], e_before[W], y_w[W], y_l[W], product[W], w_first[W];
   R flaws[W];  // a local, not probe, which the stores of the kept rows could alias
   T y_u[W], u_first[W];
