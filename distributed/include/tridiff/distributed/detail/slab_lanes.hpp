@@ -90,7 +90,7 @@ void reduce_lanes(std::ptrdiff_t m, const Rows& rows_in, T* dp, T* ap, T* cp, st
                   real_t<T>* probe) {
   // A local copy, whose pointers the stores below cannot change: through the reference GCC 12
   // left the forward sweep scalar, one lane at a time (2 ranks, 4096 x 4096 floats: a rank's
-  // reduction 73-76 -> 69 ms).
+  // reduction 73-77 -> 67-70 ms).
   const Rows rows = rows_in;
   using R = real_t<T>;
   const R tolerance = kVanishingPivot * epsilon<T>;

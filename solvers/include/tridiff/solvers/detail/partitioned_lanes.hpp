@@ -29,7 +29,7 @@
 
 namespace tridiff::detail {
 
-// Parts per vector: one 64-byte vector of scalars.
+// Parts side by side: two 64-byte vectors of scalars.
 template <class T>
 inline constexpr int kPartLanes = static_cast<int>(128 / sizeof(T) >= 2 ? 128 / sizeof(T) : 2);
 

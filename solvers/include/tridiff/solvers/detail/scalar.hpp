@@ -56,17 +56,28 @@ inline bool is_finite(const T& x) {
     return std::isfinite(x);
 }
 
-// Scalars in one 64-byte vector: the width a kernel's lane loops ask for with
+// The widest vector the lane loops of the kernels below ask for, in bytes: 64 (AVX-512). A
+// program that caps its vector width (GCC's -mprefer-vector-width=256, say) defines it as 32
+// too, since `simdlen` overrides that flag.
+#ifndef TRIDIFF_VECTOR_BYTES
+#define TRIDIFF_VECTOR_BYTES 64
+#endif
+
+// Scalars in one such vector: the width a kernel's lane loops ask for with
 // `#pragma omp simd simdlen(...)`. GCC 12 with -march=native uses 256-bit vectors on AVX-512
 // CPUs unless told otherwise, and a build-wide -mprefer-vector-width=512 slowed the image
 // kernels (the DOF default, 4K on 2 threads: 299 -> 358 ms); so only the kernels measured
-// faster with 512 bits ask for them (docs/performance.md).
+// faster with 512 bits ask for them (docs/performance.md): the parts of one long system,
+// Thomas on columns and the diffusion form's lane kernel.
 template <class T>
-inline constexpr int kVectorWidth = static_cast<int>(64 / sizeof(T) > 0 ? 64 / sizeof(T) : 1);
+inline constexpr int kVectorWidth = static_cast<int>(TRIDIFF_VECTOR_BYTES / sizeof(T) > 0
+                                                         ? TRIDIFF_VECTOR_BYTES / sizeof(T)
+                                                         : 1);
 
-// The width for a loop over W lanes that gains from 512 bits only when W spans several of
-// them (measured: the diffusion kernel on 64 lanes of columns 1.16x faster, on the rows' 16
-// lanes 0.9x): one vector of 64 bytes then, else GCC's own choice of half of it.
+// The width for a loop over W lanes that gains from wide vectors only when W spans several of
+// them (measured: the diffusion kernel on 64 lanes of columns 1.23x faster in float, on the
+// rows' 16 lanes 0.9x): one whole vector then, else half of it (what GCC 12 picks by itself
+// under -march=native).
 template <class T, int W>
 inline constexpr int kLoopWidth = W > kVectorWidth<T>       ? kVectorWidth<T>
                                   : kVectorWidth<T> / 2 > 0 ? kVectorWidth<T> / 2
