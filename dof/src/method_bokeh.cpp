@@ -42,6 +42,7 @@
 #include "tridiff/image/copy.hpp"
 #include "aperture_footprint.hpp"
 #include "diffusion_dof.hpp"
+#include "disc_body.hpp"
 #include "frame.hpp"
 #include "row_bands.hpp"
 #include "tiled_gather.hpp"  // Stages
@@ -50,9 +51,13 @@ namespace tridiff {
 namespace {
 
 using dof_detail::ApertureFootprint;
+using dof_detail::DiscTiles;
 using dof_detail::fold;
+using dof_detail::gather_discs;
 using dof_detail::HighlightBoost;
 using dof_detail::largest_channel;
+using dof_detail::paste_discs;
+using dof_detail::smooth_far_tiles;
 using dof_detail::Stages;
 
 constexpr float kAutoThreshold = 1.f;  // linear light: brighter than diffuse white
@@ -231,16 +236,26 @@ void run_bokeh(Image& out, const DofFrame& frame, const DofOptions& settings, Do
   const Sprites sprites = find_highlights(frame, boost, footprint);
   stages.end("highlights");
 
+  Image clamped =
+      sprites.lights.empty() ? Image() : clamp_highlights(frame, sprites, boost.threshold);
+  const Image& body = sprites.lights.empty() ? frame.color() : clamped;
+  // Gathered before the diffusion, which may overwrite its input (out may be the colour).
+  const DiscTiles discs = gather_discs(
+      body, frame.coc(), smooth_far_tiles(frame.coc(), frame.sharp_below(), frame.threads()),
+      frame.threads());
+  stages.end("discs");
+
   DofReport body_report;
   if (sprites.lights.empty()) {
     run_adi_spread(out, frame, settings, body_report, kBodySpread);
   } else {
-    Image body = clamp_highlights(frame, sprites, boost.threshold);
-    run_adi_spread(body, DofFrame(frame, body), settings, body_report, kBodySpread);  // in place
-    out = std::move(body);
+    run_adi_spread(clamped, DofFrame(frame, clamped), settings, body_report,
+                   kBodySpread);  // in place
+    out = std::move(clamped);
   }
   report.skipped_fraction = body_report.skipped_fraction;
   report.layered = body_report.layered;
+  paste_discs(out, discs, frame.threads());
   stages.end("body");
 
   splat_sprites(frame, sprites, footprint, out);

@@ -1,0 +1,264 @@
+#include "disc_body.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <utility>
+#include <cstring>
+
+#include "tridiff/dof/tiles.hpp"
+#include "aperture_footprint.hpp"  // fold
+
+namespace tridiff::dof_detail {
+namespace {
+
+// Tiles are gathered in blocks of kBlockRows x kBlockColumns pixels. A block's prefix sums
+// cover its rows plus the largest radius above and below, and its columns plus that radius and
+// two: taller and wider blocks sum fewer pixels twice, but the sums (32 bytes a pixel, for up
+// to four channels) must stay in L2 while the block's tiles read them. 32 x 128 with radius 16
+// is 64 rows x 164 columns, 336 KiB. (Bands of the full width, 3.5 MiB at 1920 px, made the
+// gather 3.5 times slower: its reads came from L3.)
+constexpr std::ptrdiff_t kBlockRows = 32, kBlockColumns = 128;
+
+// The block holding a tile, in raster order of blocks.
+std::pair<std::ptrdiff_t, std::ptrdiff_t> block_of(const Rect& tile) {
+  return {tile.y / kBlockRows, tile.x / kBlockColumns};
+}
+
+// Whether the tiles within `reach` tiles of (tx, ty) are all far with CoCs of at least
+// kMinDiscCocPx, spanning at most kSmoothCocPx.
+bool far_and_smooth_around(const TileMap& map, std::ptrdiff_t tx, std::ptrdiff_t ty,
+                           std::ptrdiff_t reach, float sharp_below) {
+  float lowest = INFINITY, highest = -INFINITY;
+  for (std::ptrdiff_t y = std::max<std::ptrdiff_t>(ty - reach, 0);
+       y <= std::min(ty + reach, map.tiles_y() - 1); ++y)
+    for (std::ptrdiff_t x = std::max<std::ptrdiff_t>(tx - reach, 0);
+         x <= std::min(tx + reach, map.tiles_x() - 1); ++x) {
+      const TileInfo& info = map.at(x, y);
+      if (info.kind != TileKind::far || !(info.min_coc >= std::max(sharp_below, kMinDiscCocPx)))
+        return false;
+      lowest = std::min(lowest, info.min_coc);
+      highest = std::max(highest, info.max_coc);
+    }
+  return highest - lowest <= kSmoothCocPx;
+}
+
+// Where a band's prefix sums start and end: rows [first_row, first_row + rows), pixels
+// [first_x, first_x + span), with everything outside the frame folded into it.
+struct PrefixWindow {
+  std::ptrdiff_t first_row = 0, rows = 0, first_x = 0, span = 0;
+  std::ptrdiff_t length() const { return span + 1; }
+};
+
+// The prefix sums of `input` over `window`, the channels in groups of kGroup (the last padded
+// with zeros): entry i of row j, group g is prefix[((j * groups + g) * length + i) * kGroup ...],
+// the sums of the window's first i pixels of that row, a group's channels side by side so that
+// one read of a span's end brings them all.
+constexpr int kGroup = 4;
+
+int channel_groups(int channels) { return (channels + kGroup - 1) / kGroup; }
+
+void row_prefix_sums(const Image& input, const PrefixWindow& window, std::vector<double>& prefix) {
+  const std::ptrdiff_t width = input.width(), length = window.length();
+  const int channels = input.channels(), groups = channel_groups(channels);
+  prefix.resize(std::size_t(window.rows * groups * length * kGroup));
+  for (std::ptrdiff_t j = 0; j < window.rows; ++j) {
+    const std::ptrdiff_t y = fold(window.first_row + j, input.height());
+    for (int g = 0; g < groups; ++g) {
+      const float* source[kGroup] = {};
+      for (int c = 0; c < kGroup && g * kGroup + c < channels; ++c)
+        source[c] = input.plane(g * kGroup + c).row(y);
+      double* sums = prefix.data() + (j * groups + g) * length * kGroup;
+      double sum[kGroup] = {};
+      std::fill(sums, sums + kGroup, 0.0);
+      for (std::ptrdiff_t i = 0; i < window.span; ++i) {
+        const std::ptrdiff_t x = fold(window.first_x + i, width);
+        for (int c = 0; c < kGroup; ++c)
+          sums[(i + 1) * kGroup + c] = sum[c] += source[c] ? double(source[c][x]) : 0.0;
+      }
+    }
+  }
+}
+
+// A channel group's values, in one vector register. Written as a vector type because GCC 12,
+// left to itself, vectorised the loop over the disc's rows instead (two rows at a time, every
+// read a gather) and ran 3.5 times slower.
+using Group = double __attribute__((vector_size(kGroup * sizeof(double))));
+
+inline Group load_group(const double* from) {
+  Group values;
+  std::memcpy(&values, from, sizeof values);
+  return values;
+}
+
+// The integral over [lo, hi] (pixels as unit boxes, lo <= hi inside the window) of one channel
+// group's prefix-summed row: the sums at both ends, interpolated linearly.
+inline Group span_integral(const double* row, double lo, double hi) {
+  const auto k_lo = static_cast<std::ptrdiff_t>(lo), k_hi = static_cast<std::ptrdiff_t>(hi);
+  const Group at_lo = load_group(row + k_lo * kGroup), next_lo = load_group(row + (k_lo + 1) * kGroup);
+  const Group at_hi = load_group(row + k_hi * kGroup), next_hi = load_group(row + (k_hi + 1) * kGroup);
+  return (at_hi + (hi - double(k_hi)) * (next_hi - at_hi)) -
+         (at_lo + (lo - double(k_lo)) * (next_lo - at_lo));
+}
+
+// The area of the disc of radius r between the horizontal line through its centre and the line
+// t above it (0 <= t <= r): the integral of 2 sqrt(r² - s²) over [0, t].
+inline double half_strip_area(double r, double t) {
+  return t * std::sqrt(std::max(r * r - t * t, 0.0)) + r * r * std::asin(std::min(t / r, 1.0));
+}
+
+// The disc averages of one tile, its block's prefix sums made. Row dy of a disc of radius r
+// (r >= 1/2) is the span of the disc's area in the strip [dy - 1/2, dy + 1/2], centred: the
+// rows hold the disc's area exactly, and a row enters (dy = r + 1/2) with width 0, so the
+// average is continuous in r. Rows dy and -dy share their span.
+void gather_tile(const Rect& tile, ConstPlane coc, const std::vector<double>& prefix,
+                 const PrefixWindow& window, int channels, float* out) {
+  const int groups = channel_groups(channels);
+  const std::ptrdiff_t group_stride = window.length() * kGroup, row_stride = group_stride * groups;
+  const std::ptrdiff_t area = tile.area();
+  for (std::ptrdiff_t y = tile.y; y < tile.y + tile.height; ++y)
+    for (std::ptrdiff_t x = tile.x; x < tile.x + tile.width; ++x) {
+      const double r = 0.5 * std::fabs(double(coc(x, y)));
+      const auto reach = static_cast<std::ptrdiff_t>(r + 0.5);
+      const double centre = double(x - window.first_x) + 0.5;
+      const std::ptrdiff_t at = (y - tile.y) * tile.width + (x - tile.x);
+      for (int g = 0; g < groups; ++g) {
+        const double* row = prefix.data() + (y - window.first_row) * row_stride + g * group_stride;
+        double below = half_strip_area(r, 0.5);  // the middle row's half width
+        Group sum = span_integral(row, centre - below, centre + below);
+        double weight = 2 * below;
+        for (std::ptrdiff_t dy = 1; dy <= reach; ++dy) {
+          const double above = half_strip_area(r, std::min(double(dy) + 0.5, r));
+          const double h = 0.5 * (above - below);
+          below = above;
+          sum += span_integral(row - dy * row_stride, centre - h, centre + h) +
+                 span_integral(row + dy * row_stride, centre - h, centre + h);
+          weight += 4 * h;
+        }
+        for (int c = 0; c < kGroup && g * kGroup + c < channels; ++c)
+          out[(g * kGroup + c) * area + at] = static_cast<float>(sum[c] / weight);
+      }
+    }
+}
+
+// The disc averages of a band of tiles: their prefix sums over the rows and columns their discs
+// reach, then each tile.
+void gather_band(const Image& input, ConstPlane coc, const Rect* tiles, std::size_t count,
+                 const std::size_t* offsets, std::vector<double>& prefix, float* values) {
+  float radius = 0;
+  std::ptrdiff_t top = tiles[0].y, bottom = top, left = tiles[0].x, right = left;
+  for (std::size_t t = 0; t < count; ++t) {
+    const Rect& tile = tiles[t];
+    for (std::ptrdiff_t y = tile.y; y < tile.y + tile.height; ++y)
+      for (std::ptrdiff_t x = tile.x; x < tile.x + tile.width; ++x)
+        radius = std::max(radius, 0.5f * std::fabs(coc(x, y)));
+    top = std::min(top, tile.y);
+    bottom = std::max(bottom, tile.y + tile.height);
+    left = std::min(left, tile.x);
+    right = std::max(right, tile.x + tile.width);
+  }
+  const auto reach = static_cast<std::ptrdiff_t>(radius + 0.5f);  // rows above and below
+  const std::ptrdiff_t pad = reach + 2;                     // columns: the span's ends, rounded out
+  const PrefixWindow window{top - reach, bottom - top + 2 * reach, left - pad,
+                            right - left + 2 * pad};
+  row_prefix_sums(input, window, prefix);
+  for (std::size_t t = 0; t < count; ++t)
+    gather_tile(tiles[t], coc, prefix, window, input.channels(), values + offsets[t]);
+}
+
+}  // namespace
+
+std::ptrdiff_t DiscTiles::pixels() const {
+  std::ptrdiff_t total = 0;
+  for (const Rect& tile : tiles) total += tile.area();
+  return total;
+}
+
+std::vector<Rect> smooth_far_tiles(ConstPlane coc, float sharp_below, int threads) {
+  const TileMap map(coc, sharp_below, kDiscTile, 0, threads);
+  std::vector<Rect> smooth;
+  for (std::ptrdiff_t ty = 0; ty < map.tiles_y(); ++ty)
+    for (std::ptrdiff_t tx = 0; tx < map.tiles_x(); ++tx) {
+      const TileInfo& info = map.at(tx, ty);
+      if (info.kind != TileKind::far || info.near_reach_radius > 0) continue;
+      // Every pixel within R + 1 of the tile, R its largest radius.
+      const auto reach_px = static_cast<std::ptrdiff_t>(std::ceil(info.max_radius)) + 1;
+      const std::ptrdiff_t reach = (reach_px + kDiscTile - 1) / kDiscTile;
+      if (far_and_smooth_around(map, tx, ty, reach, sharp_below))
+        smooth.push_back(map.rect(tx, ty));
+    }
+  return smooth;
+}
+
+DiscTiles gather_discs(const Image& input, ConstPlane coc, std::vector<Rect> tiles,
+                       int threads) {
+  DiscTiles discs;
+  discs.channels = input.channels();
+  discs.tiles = std::move(tiles);
+  std::stable_sort(discs.tiles.begin(), discs.tiles.end(),
+                   [](const Rect& a, const Rect& b) { return block_of(a) < block_of(b); });
+  std::size_t total = 0;
+  for (const Rect& tile : discs.tiles) {
+    discs.offsets.push_back(total);
+    total += std::size_t(tile.area() * discs.channels);
+  }
+  discs.values.resize(total);
+  // Blocks of kBlockRows x kBlockColumns pixels: a block's prefix sums are made once, for its
+  // tiles together.
+  std::vector<std::size_t> band_starts;
+  for (std::size_t t = 0; t < discs.tiles.size(); ++t)
+    if (t == 0 || block_of(discs.tiles[t]) != block_of(discs.tiles[t - 1]))
+      band_starts.push_back(t);
+  band_starts.push_back(discs.tiles.size());
+  const auto bands = std::ptrdiff_t(band_starts.size()) - 1;
+#pragma omp parallel num_threads(threads)
+  {
+    std::vector<double> prefix;
+#pragma omp for schedule(dynamic, 1)
+    for (std::ptrdiff_t b = 0; b < bands; ++b) {
+      const std::size_t first = band_starts[std::size_t(b)];
+      gather_band(input, coc, discs.tiles.data() + first, band_starts[std::size_t(b) + 1] - first,
+                  discs.offsets.data() + first, prefix, discs.values.data());
+    }
+  }
+  return discs;
+}
+
+void paste_discs(Image& out, const DiscTiles& discs, int threads) {
+  // Which tiles took the disc; a tile beyond the frame counts as one (nothing to blend with).
+  const std::ptrdiff_t tiles_x = (out.width() + kDiscTile - 1) / kDiscTile;
+  const std::ptrdiff_t tiles_y = (out.height() + kDiscTile - 1) / kDiscTile;
+  std::vector<unsigned char> chosen(std::size_t(tiles_x * tiles_y), 0);
+  for (const Rect& tile : discs.tiles)
+    chosen[std::size_t((tile.y / kDiscTile) * tiles_x + tile.x / kDiscTile)] = 1;
+  const auto is_disc = [&](std::ptrdiff_t tx, std::ptrdiff_t ty) {
+    return tx < 0 || ty < 0 || tx >= tiles_x || ty >= tiles_y ||
+           chosen[std::size_t(ty * tiles_x + tx)] != 0;
+  };
+  const auto count = std::ptrdiff_t(discs.tiles.size());
+#pragma omp parallel for num_threads(threads) schedule(static)
+  for (std::ptrdiff_t t = 0; t < count; ++t) {
+    const Rect& tile = discs.tiles[std::size_t(t)];
+    const std::ptrdiff_t tx = tile.x / kDiscTile, ty = tile.y / kDiscTile;
+    const float* values = discs.values.data() + discs.offsets[std::size_t(t)];
+    for (std::ptrdiff_t y = 0; y < tile.height; ++y)
+      for (std::ptrdiff_t x = 0; x < tile.width; ++x) {
+        // The distance from the pixel's centre to the nearest neighbouring tile without the
+        // disc (kBlendPx or more: none near).
+        double nearest = kBlendPx;
+        for (std::ptrdiff_t j = -1; j <= 1; ++j)
+          for (std::ptrdiff_t i = -1; i <= 1; ++i) {
+            if ((i == 0 && j == 0) || is_disc(tx + i, ty + j)) continue;
+            const double across = i < 0 ? double(x) + 0.5 : i > 0 ? double(tile.width - x) - 0.5 : 0;
+            const double down = j < 0 ? double(y) + 0.5 : j > 0 ? double(tile.height - y) - 0.5 : 0;
+            nearest = std::min(nearest, std::hypot(across, down));
+          }
+        const auto share = static_cast<float>(nearest / kBlendPx);
+        for (int c = 0; c < discs.channels; ++c) {
+          float& to = out.plane(c).row(tile.y + y)[tile.x + x];
+          to += share * (values[(c * tile.height + y) * tile.width + x] - to);
+        }
+      }
+  }
+}
+
+}  // namespace tridiff::dof_detail
