@@ -260,19 +260,21 @@ TEST(DofBokeh, SpritesKeepEnergyAndMatchScatter) {
 // The round aperture's sprite, which counts each row's fully covered run and evaluates only
 // the rim, against the disc by brute force: weight max(0, min(1, d/2 + 1/2 - |(dx, dy)|)) over
 // the whole square, normalised, mirror-folded at the border. The sprite is bokeh's output less
-// bokeh's on the frame with the highlight clamped to the threshold (1: the point of 1000 keeps
-// 1 in the body, 999 in the sprite; the clamped frame has no highlight, so it is the body). Diameters with rims through whole pixels (11: outer 6, so
+// bokeh's on the frame with the highlight at what the body keeps (kBodyKeeps = 1/4 of the
+// threshold 1: the point of 1000 keeps 0.25 in the body, 999.75 in the sprite; that frame has
+// no highlight, so it is the body). Diameters with rims through whole pixels (11: outer 6, so
 // (3, 4) has coverage exactly 1), tiny and large; points inside, at a corner and an edge.
 TEST(DofBokeh, RoundSpriteIsTheDiscByBruteForce) {
   constexpr std::ptrdiff_t kFrame = 96;
-  const float kExcess = kPoint - 1.f;
+  constexpr float kBodyKeeps = 0.25f;  // method_bokeh.cpp
+  const float kExcess = kPoint - kBodyKeeps;
   for (const float diameter : {11.f, 1.5f, 4.f, 20.3f, 63.f})
     for (const auto& [px, py] : {std::pair{48, 40}, std::pair{2, 1}, std::pair{90, 47}}) {
       const Image coc = make_coc(kFrame, kFrame, [=](auto, auto) { return diameter; });
       Image color = filled(kFrame, kFrame, 3, 0.f), clamped = color;
       for (int c = 0; c < 3; ++c) {
         color(px, py, c) = kPoint;
-        clamped(px, py, c) = 1.f;
+        clamped(px, py, c) = kBodyKeeps;
       }
       const Image bokeh = run("bokeh", color, coc), body = run("bokeh", clamped, coc);
       const double outer = 0.5 * diameter + 0.5;

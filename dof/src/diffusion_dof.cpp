@@ -95,7 +95,8 @@ void for_each_row(std::ptrdiff_t height, int threads, Row&& row) {
 // built-in scene at 1920 x 1080 on a 2-core VM took 268-584 ms, now typically 56).
 void layered_dof(Image& out, const DofFrame& frame, const NearLayer& near,
                  const DofOptions& settings, DofReport& report, const Diffuser& diffuse,
-                 const CocConductance& conductance, const DiffusionOptions& options) {
+                 const Diffuser& diffuse_near, const CocConductance& conductance,
+                 const DiffusionOptions& options) {
   const Image& color = frame.color();
   const ConstPlane coc = frame.coc();
   const std::ptrdiff_t width = color.width(), height = color.height();
@@ -178,7 +179,7 @@ void layered_dof(Image& out, const DofFrame& frame, const NearLayer& near,
         value[x] =
             inside[x] > 0 ? filled(in_near_field(k[x]), std::abs(k[x]), value[x], weight[x]) : 0.f;
     });
-    diffusion += diffuse(near_layer, near_layer, near_coc.plane(0), conductance, options);
+    diffusion += diffuse_near(near_layer, near_layer, near_coc.plane(0), conductance, options);
   });
 
   // Composited into the background's buffer, which then becomes `out` (a fresh buffer for
@@ -224,7 +225,7 @@ LinkField coc_links(ConstPlane coc, const CocConductance& conductance, int threa
 }
 
 void diffusion_dof(Image& out, const DofFrame& frame, const DofOptions& settings, DofReport& report,
-                   const Diffuser& diffuse, float spread) {
+                   const Diffuser& diffuse, float spread, const Diffuser* diffuse_near) {
   const CocConductance conductance{settings.in_focus_coc_px, spread};
   require_finite_conductance(frame, conductance);
   DiffusionOptions options;
@@ -235,7 +236,8 @@ void diffusion_dof(Image& out, const DofFrame& frame, const DofOptions& settings
     const NearLayer near =
         near_layer(frame.coc(), settings.in_focus_coc_px, resolve_threads(settings.threads));
     if (!near.empty) {
-      layered_dof(out, frame, near, settings, report, diffuse, conductance, options);
+      layered_dof(out, frame, near, settings, report, diffuse,
+                  diffuse_near ? *diffuse_near : diffuse, conductance, options);
       return;
     }
   }

@@ -35,9 +35,11 @@ using Diffuser =
 // The links of `conductance` as a LinkField (for the explicit methods).
 LinkField coc_links(ConstPlane coc, const CocConductance& conductance, int threads);
 
-// Depth of field by `diffuse`, with CocConductance{settings.in_focus_coc_px, spread}.
+// Depth of field by `diffuse`, with CocConductance{settings.in_focus_coc_px, spread}; with
+// layers, the near layer by `diffuse_near` if given (else by `diffuse` too).
 void diffusion_dof(Image& out, const DofFrame& frame, const DofOptions& settings, DofReport& report,
-                   const Diffuser& diffuse, float spread = 1.f);
+                   const Diffuser& diffuse, float spread = 1.f,
+                   const Diffuser* diffuse_near = nullptr);
 
 // The `adi` method's diffusion (method_adi.cpp) with its conductances times `spread`; run_adi
 // is spread 1.

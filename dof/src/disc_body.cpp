@@ -94,16 +94,32 @@ inline Group load_group(const double* from) {
 // group's prefix-summed row: the sums at both ends, interpolated linearly.
 inline Group span_integral(const double* row, double lo, double hi) {
   const auto k_lo = static_cast<std::ptrdiff_t>(lo), k_hi = static_cast<std::ptrdiff_t>(hi);
-  const Group at_lo = load_group(row + k_lo * kGroup), next_lo = load_group(row + (k_lo + 1) * kGroup);
-  const Group at_hi = load_group(row + k_hi * kGroup), next_hi = load_group(row + (k_hi + 1) * kGroup);
+  const Group at_lo = load_group(row + k_lo * kGroup),
+              next_lo = load_group(row + (k_lo + 1) * kGroup);
+  const Group at_hi = load_group(row + k_hi * kGroup),
+              next_hi = load_group(row + (k_hi + 1) * kGroup);
   return (at_hi + (hi - double(k_hi)) * (next_hi - at_hi)) -
          (at_lo + (lo - double(k_lo)) * (next_lo - at_lo));
 }
 
+// asin x for 0 <= x <= 1, within 2.2e-8 (Abramowitz & Stegun 4.4.46, a polynomial in x times
+// sqrt(1 - x)): std::asin cost a fifth of the gather.
+inline double asin_unit(double x) {
+  const double p =
+      1.5707963050 +
+      x * (-0.2145988016 +
+           x * (0.0889789874 +
+                x * (-0.0501743046 +
+                     x * (0.0308918810 +
+                          x * (-0.0170881256 + x * (0.0066700901 + x * -0.0012624911))))));
+  return 1.5707963267948966 - std::sqrt(std::max(1 - x, 0.0)) * p;
+}
+
 // The area of the disc of radius r between the horizontal line through its centre and the line
-// t above it (0 <= t <= r): the integral of 2 sqrt(r² - s²) over [0, t].
+// t above it (0 <= t <= r): the integral of 2 sqrt(r² - s²) over [0, t]. The error of
+// asin_unit, r² 2.2e-8, is 2e-5 pixels at r = 32.
 inline double half_strip_area(double r, double t) {
-  return t * std::sqrt(std::max(r * r - t * t, 0.0)) + r * r * std::asin(std::min(t / r, 1.0));
+  return t * std::sqrt(std::max(r * r - t * t, 0.0)) + r * r * asin_unit(std::min(t / r, 1.0));
 }
 
 // The disc averages of one tile, its block's prefix sums made. Row dy of a disc of radius r
@@ -157,7 +173,7 @@ void gather_band(const Image& input, ConstPlane coc, const Rect* tiles, std::siz
     right = std::max(right, tile.x + tile.width);
   }
   const auto reach = static_cast<std::ptrdiff_t>(radius + 0.5f);  // rows above and below
-  const std::ptrdiff_t pad = reach + 2;                     // columns: the span's ends, rounded out
+  const std::ptrdiff_t pad = reach + 2;  // columns: the span's ends, rounded out
   const PrefixWindow window{top - reach, bottom - top + 2 * reach, left - pad,
                             right - left + 2 * pad};
   row_prefix_sums(input, window, prefix);
@@ -189,8 +205,7 @@ std::vector<Rect> smooth_far_tiles(ConstPlane coc, float sharp_below, int thread
   return smooth;
 }
 
-DiscTiles gather_discs(const Image& input, ConstPlane coc, std::vector<Rect> tiles,
-                       int threads) {
+DiscTiles gather_discs(const Image& input, ConstPlane coc, std::vector<Rect> tiles, int threads) {
   DiscTiles discs;
   discs.channels = input.channels();
   discs.tiles = std::move(tiles);
@@ -240,6 +255,17 @@ void paste_discs(Image& out, const DiscTiles& discs, int threads) {
     const Rect& tile = discs.tiles[std::size_t(t)];
     const std::ptrdiff_t tx = tile.x / kDiscTile, ty = tile.y / kDiscTile;
     const float* values = discs.values.data() + discs.offsets[std::size_t(t)];
+    bool inside = true;  // every neighbouring tile took the disc: nothing to blend
+    for (std::ptrdiff_t j = -1; j <= 1; ++j)
+      for (std::ptrdiff_t i = -1; i <= 1; ++i) inside = inside && is_disc(tx + i, ty + j);
+    if (inside) {
+      for (int c = 0; c < discs.channels; ++c)
+        for (std::ptrdiff_t y = 0; y < tile.height; ++y) {
+          const float* from = values + (c * tile.height + y) * tile.width;
+          std::copy(from, from + tile.width, out.plane(c).row(tile.y + y) + tile.x);
+        }
+      continue;
+    }
     for (std::ptrdiff_t y = 0; y < tile.height; ++y)
       for (std::ptrdiff_t x = 0; x < tile.width; ++x) {
         // The distance from the pixel's centre to the nearest neighbouring tile without the
@@ -248,7 +274,9 @@ void paste_discs(Image& out, const DiscTiles& discs, int threads) {
         for (std::ptrdiff_t j = -1; j <= 1; ++j)
           for (std::ptrdiff_t i = -1; i <= 1; ++i) {
             if ((i == 0 && j == 0) || is_disc(tx + i, ty + j)) continue;
-            const double across = i < 0 ? double(x) + 0.5 : i > 0 ? double(tile.width - x) - 0.5 : 0;
+            const double across = i < 0   ? double(x) + 0.5
+                                  : i > 0 ? double(tile.width - x) - 0.5
+                                          : 0;
             const double down = j < 0 ? double(y) + 0.5 : j > 0 ? double(tile.height - y) - 0.5 : 0;
             nearest = std::min(nearest, std::hypot(across, down));
           }

@@ -61,8 +61,7 @@ std::vector<Rect> smooth_far_tiles(ConstPlane coc, float sharp_below, int thread
 
 // The disc average of `input` (same size as coc) on each of `tiles` (each a rectangle of the
 // frame; rows of tiles sharing a y are gathered together). OpenMP over rows of tiles.
-DiscTiles gather_discs(const Image& input, ConstPlane coc, std::vector<Rect> tiles,
-                       int threads);
+DiscTiles gather_discs(const Image& input, ConstPlane coc, std::vector<Rect> tiles, int threads);
 
 // The width (px) over which a disc tile blends into a neighbouring tile without the disc: the
 // two blurs differ by the texture a bell leaves, and a hard switch drew the tiles' staircase
