@@ -125,41 +125,65 @@ inline double half_strip_area(double r, double t) {
 // The disc averages of one tile, its block's prefix sums made. Row dy of a disc of radius r
 // (r >= 1/2) is the span of the disc's area in the strip [dy - 1/2, dy + 1/2], centred: the
 // rows hold the disc's area exactly, and a row enters (dy = r + 1/2) with width 0, so the
-// average is continuous in r. Rows dy and -dy share their span.
+// average is continuous in r. Rows dy and -dy share their span. The half widths of a row of the
+// tile are computed first, its kDiscTile pixels in vector lanes (`half_widths`, row dy's at
+// [dy * kDiscTile ...]; lanes past the tile's edge repeat its first pixel).
 void gather_tile(const Rect& tile, ConstPlane coc, const std::vector<double>& prefix,
-                 const PrefixWindow& window, int channels, float* out) {
+                 const PrefixWindow& window, int channels, std::vector<double>& half_widths,
+                 float* out) {
   const int groups = channel_groups(channels);
   const std::ptrdiff_t group_stride = window.length() * kGroup, row_stride = group_stride * groups;
   const std::ptrdiff_t area = tile.area();
-  for (std::ptrdiff_t y = tile.y; y < tile.y + tile.height; ++y)
-    for (std::ptrdiff_t x = tile.x; x < tile.x + tile.width; ++x) {
-      const double r = 0.5 * std::fabs(double(coc(x, y)));
-      const auto reach = static_cast<std::ptrdiff_t>(r + 0.5);
-      const double centre = double(x - window.first_x) + 0.5;
-      const std::ptrdiff_t at = (y - tile.y) * tile.width + (x - tile.x);
-      for (int g = 0; g < groups; ++g) {
-        const double* row = prefix.data() + (y - window.first_row) * row_stride + g * group_stride;
-        double below = half_strip_area(r, 0.5);  // the middle row's half width
-        Group sum = span_integral(row, centre - below, centre + below);
-        double weight = 2 * below;
-        for (std::ptrdiff_t dy = 1; dy <= reach; ++dy) {
-          const double above = half_strip_area(r, std::min(double(dy) + 0.5, r));
-          const double h = 0.5 * (above - below);
-          below = above;
-          sum += span_integral(row - dy * row_stride, centre - h, centre + h) +
-                 span_integral(row + dy * row_stride, centre - h, centre + h);
-          weight += 4 * h;
-        }
-        for (int c = 0; c < kGroup && g * kGroup + c < channels; ++c)
-          out[(g * kGroup + c) * area + at] = static_cast<float>(sum[c] / weight);
+  for (std::ptrdiff_t y = tile.y; y < tile.y + tile.height; ++y) {
+    double radius[kDiscTile], below[kDiscTile], weight[kDiscTile];
+    double largest = 0;
+    for (std::ptrdiff_t i = 0; i < kDiscTile; ++i) {
+      radius[i] = 0.5 * std::fabs(double(coc(tile.x + (i < tile.width ? i : 0), y)));
+      largest = std::max(largest, radius[i]);
+    }
+    const auto reach = static_cast<std::ptrdiff_t>(largest + 0.5);
+    half_widths.resize(std::size_t((reach + 1) * kDiscTile));
+    double* widths = half_widths.data();
+#pragma omp simd
+    for (std::ptrdiff_t i = 0; i < kDiscTile; ++i) {
+      below[i] = half_strip_area(radius[i], std::min(0.5, radius[i]));
+      widths[i] = below[i];
+      weight[i] = 2 * below[i];
+    }
+    for (std::ptrdiff_t dy = 1; dy <= reach; ++dy) {
+#pragma omp simd
+      for (std::ptrdiff_t i = 0; i < kDiscTile; ++i) {
+        const double above = half_strip_area(radius[i], std::min(double(dy) + 0.5, radius[i]));
+        const double h = std::max(0.5 * (above - below[i]), 0.0);  // 0 past the disc
+        below[i] = above;
+        widths[dy * kDiscTile + i] = h;
+        weight[i] += 4 * h;
       }
     }
+    for (std::ptrdiff_t i = 0; i < tile.width; ++i) {
+      const double centre = double(tile.x + i - window.first_x) + 0.5;
+      const auto rows = static_cast<std::ptrdiff_t>(radius[i] + 0.5);
+      const std::ptrdiff_t at = (y - tile.y) * tile.width + i;
+      for (int g = 0; g < groups; ++g) {
+        const double* row = prefix.data() + (y - window.first_row) * row_stride + g * group_stride;
+        Group sum = span_integral(row, centre - widths[i], centre + widths[i]);
+        for (std::ptrdiff_t dy = 1; dy <= rows; ++dy) {
+          const double h = widths[dy * kDiscTile + i];
+          sum += span_integral(row - dy * row_stride, centre - h, centre + h) +
+                 span_integral(row + dy * row_stride, centre - h, centre + h);
+        }
+        for (int c = 0; c < kGroup && g * kGroup + c < channels; ++c)
+          out[(g * kGroup + c) * area + at] = static_cast<float>(sum[c] / weight[i]);
+      }
+    }
+  }
 }
 
 // The disc averages of a band of tiles: their prefix sums over the rows and columns their discs
 // reach, then each tile.
 void gather_band(const Image& input, ConstPlane coc, const Rect* tiles, std::size_t count,
-                 const std::size_t* offsets, std::vector<double>& prefix, float* values) {
+                 const std::size_t* offsets, std::vector<double>& prefix,
+                 std::vector<double>& half_widths, float* values) {
   float radius = 0;
   std::ptrdiff_t top = tiles[0].y, bottom = top, left = tiles[0].x, right = left;
   for (std::size_t t = 0; t < count; ++t) {
@@ -178,7 +202,7 @@ void gather_band(const Image& input, ConstPlane coc, const Rect* tiles, std::siz
                             right - left + 2 * pad};
   row_prefix_sums(input, window, prefix);
   for (std::size_t t = 0; t < count; ++t)
-    gather_tile(tiles[t], coc, prefix, window, input.channels(), values + offsets[t]);
+    gather_tile(tiles[t], coc, prefix, window, input.channels(), half_widths, values + offsets[t]);
 }
 
 }  // namespace
@@ -227,12 +251,12 @@ DiscTiles gather_discs(const Image& input, ConstPlane coc, std::vector<Rect> til
   const auto bands = std::ptrdiff_t(band_starts.size()) - 1;
 #pragma omp parallel num_threads(threads)
   {
-    std::vector<double> prefix;
+    std::vector<double> prefix, half_widths;
 #pragma omp for schedule(dynamic, 1)
     for (std::ptrdiff_t b = 0; b < bands; ++b) {
       const std::size_t first = band_starts[std::size_t(b)];
       gather_band(input, coc, discs.tiles.data() + first, band_starts[std::size_t(b) + 1] - first,
-                  discs.offsets.data() + first, prefix, discs.values.data());
+                  discs.offsets.data() + first, prefix, half_widths, discs.values.data());
     }
   }
   return discs;
