@@ -394,8 +394,11 @@ struct BruteDisc {
 // texture with a uniform CoC, every pixel (borders included) against BruteDisc. Each row of
 // the gather holds the disc's exact area in its strip, but as a centred span, so the rim's
 // pixels differ from their true coverage, by a share that falls as 1/d: measured max 1.2e-2,
-// 3.2e-3, 2.8e-3, 1.6e-3, 4.1e-4 and rms 2.3e-3 ... 9.4e-5 for d = 4 ... 31.3, on values in
-// [0, 1]. The bounds are 0.06 / d and 0.015 / d.
+// 3.2e-3, 2.8e-3 and rms 2.3e-3, 8.3e-4, 7.4e-4 for d = 4, 5.3, 7, on values in [0, 1]. From
+// d = 16 a tile is gathered every 2 px and interpolated (kSparseRadius), which adds the texture
+// the disc passes at wavelengths of 4 px: max 8.4e-3 and 2.6e-3, rms 1.5e-3 and 5.1e-4 for
+// d = 16 and 31.3 (dense: 1.6e-3 and 4.1e-4 max). The bounds are 0.06 / d dense, 0.15 / d
+// sparse (max), and a quarter of that (rms).
 TEST(DofBokeh, SmoothFarFieldIsTheDiscByBruteForce) {
   constexpr std::ptrdiff_t kFrame = 96;
   const Image texture = natural_texture(kFrame, 11);
@@ -413,8 +416,9 @@ TEST(DofBokeh, SmoothFarFieldIsTheDiscByBruteForce) {
     const double rms = std::sqrt(squares / double(kFrame * kFrame));
     std::printf("[ measured ] CoC %g px: max %.2e, rms %.2e against the disc\n", diameter, worst,
                 rms);
-    EXPECT_LT(worst, 0.06 / diameter) << "CoC " << diameter;
-    EXPECT_LT(rms, 0.015 / diameter) << "CoC " << diameter;
+    const double bound = (diameter >= 16 ? 0.15 : 0.06) / diameter;
+    EXPECT_LT(worst, bound) << "CoC " << diameter;
+    EXPECT_LT(rms, bound / 4) << "CoC " << diameter;
   }
 }
 
