@@ -477,6 +477,9 @@ TEST(DofBokeh, DiscTilesAreOnlyWhereTheCocIsSmooth) {
           }
         ASSERT_GT(std::hypot(double(x - 20), double(y - 140)), 16.0) << x << ", " << y;
       }
+  // A CoC above kMaxDiscCocPx keeps the diffusion: its prefix sums would grow as its square.
+  const Image huge = make_coc(64, 64, [](auto, auto) { return 300.f; });
+  EXPECT_TRUE(dof_detail::smooth_far_tiles(huge.plane(0), 1.f, 2).empty());
   // Far from the square, the step and the near pixel: chosen.
   for (const auto& [x, y] :
        {std::pair{8, 8}, std::pair{100, 100}, std::pair{70, 150}, std::pair{150, 20}})

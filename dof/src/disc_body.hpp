@@ -12,19 +12,28 @@
 // Which pixels. The frame is cut into kDiscTile squares (TileMap). A tile is "smooth" when
 //  - no near pixel's disc reaches it (TileMap::near_reach_radius == 0), and
 //  - every pixel within the tile's largest radius R + 1 of it (rounded out to whole tiles) is
-//    far with c >= kMinDiscCocPx (and >= sharp_below), the CoCs spanning at most kSmoothCocPx.
+//    far with kMinDiscCocPx <= c <= kMaxDiscCocPx (and c >= sharp_below), the CoCs spanning at
+//    most kSmoothCocPx.
 // Then every disc a smooth pixel gathers covers only far pixels whose own disc, which a scatter
 // would spread, differs from the gathering pixel's by at most kSmoothCocPx / 2 in radius: about
 // the width of the anti-aliased rim.
 //
-// The disc. A pixel of radius r = c / 2 averages, over the rows dy = -floor(r) .. floor(r), the
-// input's row y + dy over the span x ± h(dy), h = sqrt(r² - dy²), reading both ends of the
-// span from the row's prefix sums (in double), interpolated linearly: the exact integral of the
-// row (pixels as boxes) over the span, so the ends are anti-aliased and the average varies
-// continuously with r (a row enters the disc with h = 0). The weight is Σ 2 h(dy). Rows and
-// columns beyond the frame fold as a mirror (fold(), as scatter's splats do). Cost per pixel:
-// 2 floor(r) + 1 rows, one square root and two interpolated reads per channel each, O(r) and not
-// O(r²); the prefix rows are made per row of tiles.
+// The disc. A pixel of radius r = c / 2 averages, over the rows dy = -floor(r + 1/2) ..
+// floor(r + 1/2), the input's row y + dy over a span centred on x, as wide as the disc's area in
+// the strip [dy - 1/2, dy + 1/2] (exact, through an arcsine polynomial): the rows hold the
+// disc's area, a row enters (r = |dy| - 1/2) with width 0, so the average varies continuously
+// with r. Both ends of a span are read from the row's prefix sums (in double), interpolated
+// linearly: the exact integral of the row (pixels as boxes) over the span, so the ends are
+// anti-aliased. The weight is the sum of the strips' areas, pi r². Rows and columns beyond the
+// frame fold as a mirror (fold(), as scatter's splats do). Tiles whose radii are all 8 px or
+// more are gathered every 2 px and interpolated (disc_body.cpp, kSparseRadius). Cost: per pixel
+// 2 floor(r + 1/2) + 1 rows, two interpolated reads a row per group of four channels, O(r) and
+// not O(r²); per block of 32 x 128 pixels, prefix sums over (32 + 2 r) x (128 + 2 r) pixels,
+// which kMaxDiscCocPx bounds.
+//
+// Precision: the prefix sums are in double; a value above about 1e13 times the others in the
+// same block's window (an in-focus pixel in the same rows, not clamped as a highlight) costs
+// the small ones their digits.
 #pragma once
 
 #include <cstddef>
@@ -44,6 +53,11 @@ inline constexpr float kSmoothCocPx = 1.f;
 // centred spans to draw a disc (at 2.5 px the gather is 0.02 from the pixels' true coverage on
 // a 1/f² texture in [0, 1], at 7 px 0.003), and the diffusion's bell is as near.
 inline constexpr float kMinDiscCocPx = 4.f;
+// The largest: the prefix sums of a block cover (32 + c) x (128 + c) pixels and each pixel reads
+// c + 1 rows, so a disc of thousands of pixels would cost seconds and gigabytes where the
+// diffusion costs the same at any size. 128 px (twice the lens's default clamp): 1.3 MiB of sums
+// a block.
+inline constexpr float kMaxDiscCocPx = 128.f;
 
 // The disc averages of the smooth tiles, packed: tile i's channel c is values[offset_i + c *
 // area_i ...] in row-major order.
@@ -59,8 +73,9 @@ struct DiscTiles {
 // The tiles of `coc` that are smooth (above), in raster order.
 std::vector<Rect> smooth_far_tiles(ConstPlane coc, float sharp_below, int threads);
 
-// The disc average of `input` (same size as coc) on each of `tiles` (each a rectangle of the
-// frame; rows of tiles sharing a y are gathered together). OpenMP over rows of tiles.
+// The disc average of `input` (same size as coc) on each of `tiles` (tiles of the kDiscTile
+// grid, from smooth_far_tiles). OpenMP over blocks of 32 x 128 pixels, whose tiles share their
+// prefix sums; the result does not depend on the thread count.
 DiscTiles gather_discs(const Image& input, ConstPlane coc, std::vector<Rect> tiles, int threads);
 
 // The width (px) over which a disc tile blends into a neighbouring tile without the disc: the
