@@ -486,6 +486,56 @@ TEST(DofBokeh, DiscTilesAreOnlyWhereTheCocIsSmooth) {
     EXPECT_TRUE(chosen[std::size_t(y * kFrame + x)]) << x << ", " << y;
 }
 
+// The blend of the disc tiles into the diffusion around them, checked on the weights alone: the
+// disc values of an all-ones image pasted over a zero body give each pixel its share, which
+// must be min(1, d / kBlendPx), d the distance from the pixel's centre to the nearest of the
+// 8 neighbouring tiles that did not take the disc (tiles beyond the frame count as disc
+// tiles), computed here from the tile set.
+TEST(DofBokeh, DiscTilesBlendIntoTheDiffusionOverKBlendPx) {
+  constexpr std::ptrdiff_t kFrame = 96;
+  // Far CoC 10, except a sharp pixel whose neighbourhood keeps the diffusion.
+  Image coc = make_coc(kFrame, kFrame, [](auto, auto) { return 10.f; });
+  coc(50, 45, 0) = 0.f;
+  const std::vector<Rect> tiles = dof_detail::smooth_far_tiles(coc.plane(0), 1.f, 2);
+  const Image ones = filled(kFrame, kFrame, 1, 1.f);
+  const dof_detail::DiscTiles discs = dof_detail::gather_discs(ones, coc.plane(0), tiles, 2);
+  Image out = filled(kFrame, kFrame, 1, 0.f);
+  dof_detail::paste_discs(out, discs, 2);
+  constexpr std::ptrdiff_t kTiles = kFrame / dof_detail::kDiscTile;
+  std::vector<bool> disc(std::size_t(kTiles * kTiles), false);
+  for (const Rect& tile : tiles)
+    disc[std::size_t((tile.y / dof_detail::kDiscTile) * kTiles + tile.x / dof_detail::kDiscTile)] =
+        true;
+  std::ptrdiff_t blended = 0;
+  for (std::ptrdiff_t y = 0; y < kFrame; ++y)
+    for (std::ptrdiff_t x = 0; x < kFrame; ++x) {
+      const std::ptrdiff_t tx = x / dof_detail::kDiscTile, ty = y / dof_detail::kDiscTile;
+      if (!disc[std::size_t(ty * kTiles + tx)]) {
+        ASSERT_EQ(out(x, y, 0), 0.f) << x << ", " << y;
+        continue;
+      }
+      double nearest = dof_detail::kBlendPx;
+      for (std::ptrdiff_t j = -1; j <= 1; ++j)
+        for (std::ptrdiff_t i = -1; i <= 1; ++i) {
+          const std::ptrdiff_t nx = tx + i, ny = ty + j;
+          if (nx < 0 || ny < 0 || nx >= kTiles || ny >= kTiles ||
+              disc[std::size_t(ny * kTiles + nx)])
+            continue;
+          // From the pixel's centre to the neighbouring tile's square.
+          const double x0 = double(nx * dof_detail::kDiscTile),
+                       y0 = double(ny * dof_detail::kDiscTile);
+          const double px = double(x) + 0.5, py = double(y) + 0.5;
+          const double across = std::max({x0 - px, px - (x0 + dof_detail::kDiscTile), 0.0});
+          const double down = std::max({y0 - py, py - (y0 + dof_detail::kDiscTile), 0.0});
+          nearest = std::min(nearest, std::hypot(across, down));
+        }
+      const double share = nearest / dof_detail::kBlendPx;
+      blended += share < 1;
+      ASSERT_NEAR(out(x, y, 0), share, 1e-6) << x << ", " << y;
+    }
+  EXPECT_GT(blended, 100);  // the test saw blending
+}
+
 // The body's blur where the CoC is not smooth (here it alternates by 1.2 px between 8 x 8
 // blocks, so no tile takes the disc), on that texture, against the thin-lens disc of the mean
 // CoC by brute force: with its conductance fitted to the disc's transfer function
