@@ -16,15 +16,23 @@
 namespace tridiff::dof_detail {
 namespace {
 
-// Adds the time `work` takes to the report as a stage called `name`.
+// Adds the time `work` takes to the report as a stage called `name`, before the stages `work`
+// itself reports (a Diffuser may list its parts), and less their time: the stages add up.
 template <class Work>
 auto timed(DofReport& report, const char* name, Work&& work) {
   struct Record {
     DofReport& report;
     const char* name;
+    std::size_t first_nested;
     StageClock::time_point start;
-    ~Record() { report.stages.push_back({name, seconds_since(start)}); }
-  } record{report, name, StageClock::now()};
+    ~Record() {
+      double seconds = seconds_since(start);
+      for (std::size_t i = first_nested; i < report.stages.size(); ++i)
+        seconds -= report.stages[i].seconds;
+      report.stages.insert(report.stages.begin() + std::ptrdiff_t(first_nested),
+                           {name, std::max(seconds, 0.0)});
+    }
+  } record{report, name, report.stages.size(), StageClock::now()};
   return work();
 }
 

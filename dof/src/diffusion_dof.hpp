@@ -27,7 +27,8 @@ struct CocConductance {
 // A diffusion operator: dst = diffuse(src) with the conductances `conductance` gives the CoC
 // plane `coc` (dst may be src). The frame is checked before (DofFrame), and so is
 // every pixel's conductance (diffusion_dof): what the operator refuses beyond that it must name
-// as the CoC's ("coc"), as a user who gave the CoC understands it.
+// as the CoC's ("coc"), as a user who gave the CoC understands it. A diffuser may add stages of
+// its own to the report diffusion_dof was given; the stage that runs it then counts the rest.
 using Diffuser =
     std::function<DiffusionReport(Image& dst, const Image& src, ConstPlane coc,
                                   const CocConductance& conductance, const DiffusionOptions&)>;

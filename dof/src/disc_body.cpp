@@ -341,17 +341,6 @@ void paste_discs(Image& out, const DiscTiles& discs, int threads) {
     const Rect& tile = discs.tiles[std::size_t(t)];
     const std::ptrdiff_t tx = tile.x / kDiscTile, ty = tile.y / kDiscTile;
     const float* values = discs.values.data() + discs.offsets[std::size_t(t)];
-    bool inside = true;  // every neighbouring tile took the disc: nothing to blend
-    for (std::ptrdiff_t j = -1; j <= 1; ++j)
-      for (std::ptrdiff_t i = -1; i <= 1; ++i) inside = inside && is_disc(tx + i, ty + j);
-    if (inside) {
-      for (int c = 0; c < discs.channels; ++c)
-        for (std::ptrdiff_t y = 0; y < tile.height; ++y) {
-          const float* from = values + (c * tile.height + y) * tile.width;
-          std::copy(from, from + tile.width, out.plane(c).row(tile.y + y) + tile.x);
-        }
-      continue;
-    }
     for (std::ptrdiff_t y = 0; y < tile.height; ++y)
       for (std::ptrdiff_t x = 0; x < tile.width; ++x) {
         // The distance from the pixel's centre to the nearest neighbouring tile without the
@@ -368,8 +357,9 @@ void paste_discs(Image& out, const DiscTiles& discs, int threads) {
           }
         const auto share = static_cast<float>(nearest / kBlendPx);
         for (int c = 0; c < discs.channels; ++c) {
+          const float disc = values[(c * tile.height + y) * tile.width + x];
           float& to = out.plane(c).row(tile.y + y)[tile.x + x];
-          to += share * (values[(c * tile.height + y) * tile.width + x] - to);
+          to = share >= 1 ? disc : to + share * (disc - to);
         }
       }
   }
