@@ -14,8 +14,10 @@
 //                                               in focus are not even copied. Each run blurs
 //                                               the last one's output again (the work is the
 //                                               same: it depends on the CoC only)
-// for sizes 1024x1024, 2048x2048 and 3840x2160 and threads 1 and 2. What is timed is the method
-// alone: the scene's colour and CoC are made once, before timing, and cached.
+// for sizes 1024x1024, 1920x1080 (the size of issue 26's targets), 2048x2048 and 3840x2160 and
+// threads 1 and 2. Each method runs with its defaults (default_settings: layers where it has
+// them, as `tridiff dof` runs it). What is timed is the method alone: the scene's colour and
+// CoC are made once, before timing, and cached.
 // Counters:
 //   copy_ratio        time / the copy time of the same image at the same thread count
 //                     (the copy measured once per size and thread count, best of 5)
@@ -187,10 +189,18 @@ void bm_adi_traffic(benchmark::State& state, std::ptrdiff_t width, std::ptrdiff_
   set_counters(state, width, height, threads, 0);
 }
 
-// One untimed-by-the-framework run: its output and its wall time.
-double run_once(const DofMethod& method, const DofScene& s, int threads, Image& out) {
+// A method's options as `tridiff dof` and the Python module run it by default: with layers
+// where it has them (what a user gets, and what the truth scores measure).
+DofOptions default_settings(const DofMethod& method, int threads) {
   DofOptions settings;
   settings.threads = threads;
+  settings.layers = method.honours_layers;
+  return settings;
+}
+
+// One untimed-by-the-framework run: its output and its wall time.
+double run_once(const DofMethod& method, const DofScene& s, int threads, Image& out) {
+  const DofOptions settings = default_settings(method, threads);
   DofReport report;
   const auto start = std::chrono::steady_clock::now();
   report = depth_of_field(out, s.color, s.coc.plane(0), method, settings);
@@ -289,8 +299,7 @@ void bm_method(benchmark::State& state, const DofMethod& method, const std::stri
   }
   const CachedScene& cached = scene(name, width, height, focus_percent);
   copy_seconds(width, height, threads);
-  DofOptions settings;
-  settings.threads = threads;
+  const DofOptions settings = default_settings(method, threads);
   Image out(width, height, 3);
   DofReport report;
   const auto start = std::chrono::steady_clock::now();
@@ -332,8 +341,7 @@ void bm_method(benchmark::State& state, const DofMethod& method, const std::stri
 void bm_in_place(benchmark::State& state, const DofMethod& method, int focus_percent) {
   const CachedScene& cached = scene("focus", kFocusSize, kFocusSize, focus_percent);
   copy_seconds(kFocusSize, kFocusSize, kFocusThreads);
-  DofOptions settings;
-  settings.threads = kFocusThreads;
+  const DofOptions settings = default_settings(method, kFocusThreads);
   Image image = cached.scene.color;
   DofReport report;
   for (auto _ : state) {
@@ -347,7 +355,7 @@ void bm_in_place(benchmark::State& state, const DofMethod& method, int focus_per
 
 void register_all() {
   const std::pair<std::ptrdiff_t, std::ptrdiff_t> sizes[] = {
-      {1024, 1024}, {2048, 2048}, {3840, 2160}};
+      {1024, 1024}, {1920, 1080}, {2048, 2048}, {3840, 2160}};
   auto add = [](const std::string& name, auto&&... args) {
     benchmark::RegisterBenchmark(name.c_str(), args...)
         ->UseRealTime()

@@ -324,6 +324,26 @@ DiscTiles gather_discs(const Image& input, ConstPlane coc, std::vector<Rect> til
   return discs;
 }
 
+namespace {
+
+// The disc's share at pixel (x, y) of `tile` (tile (tx, ty) of the grid): its distance from the
+// nearest neighbouring tile without the disc over kBlendPx, at most 1.
+template <class IsDisc>
+float blend_share(const IsDisc& is_disc, std::ptrdiff_t tx, std::ptrdiff_t ty, const Rect& tile,
+                  std::ptrdiff_t x, std::ptrdiff_t y) {
+  double nearest = kBlendPx;
+  for (std::ptrdiff_t j = -1; j <= 1; ++j)
+    for (std::ptrdiff_t i = -1; i <= 1; ++i) {
+      if ((i == 0 && j == 0) || is_disc(tx + i, ty + j)) continue;
+      const double across = i < 0 ? double(x) + 0.5 : i > 0 ? double(tile.width - x) - 0.5 : 0;
+      const double down = j < 0 ? double(y) + 0.5 : j > 0 ? double(tile.height - y) - 0.5 : 0;
+      nearest = std::min(nearest, std::hypot(across, down));
+    }
+  return static_cast<float>(nearest / kBlendPx);
+}
+
+}  // namespace
+
 void paste_discs(Image& out, const DiscTiles& discs, int threads) {
   // Which tiles took the disc; a tile beyond the frame counts as one (nothing to blend with).
   const std::ptrdiff_t tiles_x = (out.width() + kDiscTile - 1) / kDiscTile;
@@ -341,27 +361,24 @@ void paste_discs(Image& out, const DiscTiles& discs, int threads) {
     const Rect& tile = discs.tiles[std::size_t(t)];
     const std::ptrdiff_t tx = tile.x / kDiscTile, ty = tile.y / kDiscTile;
     const float* values = discs.values.data() + discs.offsets[std::size_t(t)];
-    for (std::ptrdiff_t y = 0; y < tile.height; ++y)
-      for (std::ptrdiff_t x = 0; x < tile.width; ++x) {
-        // The distance from the pixel's centre to the nearest neighbouring tile without the
-        // disc (kBlendPx or more: none near).
-        double nearest = kBlendPx;
-        for (std::ptrdiff_t j = -1; j <= 1; ++j)
-          for (std::ptrdiff_t i = -1; i <= 1; ++i) {
-            if ((i == 0 && j == 0) || is_disc(tx + i, ty + j)) continue;
-            const double across = i < 0   ? double(x) + 0.5
-                                  : i > 0 ? double(tile.width - x) - 0.5
-                                          : 0;
-            const double down = j < 0 ? double(y) + 0.5 : j > 0 ? double(tile.height - y) - 0.5 : 0;
-            nearest = std::min(nearest, std::hypot(across, down));
-          }
-        const auto share = static_cast<float>(nearest / kBlendPx);
-        for (int c = 0; c < discs.channels; ++c) {
-          const float disc = values[(c * tile.height + y) * tile.width + x];
-          float& to = out.plane(c).row(tile.y + y)[tile.x + x];
-          to = share >= 1 ? disc : to + share * (disc - to);
+    bool blends = false;  // a neighbouring tile keeps the diffusion
+    for (std::ptrdiff_t j = -1; j <= 1; ++j)
+      for (std::ptrdiff_t i = -1; i <= 1; ++i) blends = blends || !is_disc(tx + i, ty + j);
+    float share[kDiscTile];
+    for (std::ptrdiff_t y = 0; y < tile.height; ++y) {
+      for (std::ptrdiff_t x = 0; x < tile.width; ++x)
+        share[x] = blends ? blend_share(is_disc, tx, ty, tile, x, y) : 1.f;
+      for (int c = 0; c < discs.channels; ++c) {
+        const float* disc = values + (c * tile.height + y) * tile.width;
+        float* to = out.plane(c).row(tile.y + y) + tile.x;
+        if (!blends) {
+          std::copy(disc, disc + tile.width, to);
+          continue;
         }
+        for (std::ptrdiff_t x = 0; x < tile.width; ++x)
+          to[x] = share[x] >= 1 ? disc[x] : to[x] + share[x] * (disc[x] - to[x]);
       }
+    }
   }
 }
 
