@@ -394,11 +394,8 @@ struct BruteDisc {
 // texture with a uniform CoC, every pixel (borders included) against BruteDisc. Each row of
 // the gather holds the disc's exact area in its strip, but as a centred span, so the rim's
 // pixels differ from their true coverage, by a share that falls as 1/d: measured max 1.2e-2,
-// 3.2e-3, 2.8e-3 and rms 2.3e-3, 8.3e-4, 7.4e-4 for d = 4, 5.3, 7, on values in [0, 1]. From
-// d = 16 a tile is gathered every 2 px and interpolated (kSparseRadius), which adds the texture
-// the disc passes at wavelengths of 4 px: max 8.4e-3 and 2.6e-3, rms 1.5e-3 and 5.1e-4 for
-// d = 16 and 31.3 (dense: 1.6e-3 and 4.1e-4 max). The bounds are 0.06 / d dense, 0.15 / d
-// sparse (max), and a quarter of that (rms).
+// 3.2e-3, 2.8e-3, 1.6e-3, 4.1e-4 and rms 2.3e-3, 8.3e-4, 7.4e-4, 3.5e-4, 9.4e-5 for d = 4, 5.3,
+// 7, 16, 31.3, on values in [0, 1]. The bound is 0.06 / d (max), and a quarter of that (rms).
 TEST(DofBokeh, SmoothFarFieldIsTheDiscByBruteForce) {
   constexpr std::ptrdiff_t kFrame = 96;
   const Image texture = natural_texture(kFrame, 11);
@@ -416,9 +413,42 @@ TEST(DofBokeh, SmoothFarFieldIsTheDiscByBruteForce) {
     const double rms = std::sqrt(squares / double(kFrame * kFrame));
     std::printf("[ measured ] CoC %g px: max %.2e, rms %.2e against the disc\n", diameter, worst,
                 rms);
-    const double bound = (diameter >= 16 ? 0.15 : 0.06) / diameter;
+    const double bound = 0.06 / diameter;
     EXPECT_LT(worst, bound) << "CoC " << diameter;
     EXPECT_LT(rms, bound / 4) << "CoC " << diameter;
+  }
+}
+
+// The same where the CoC varies within a tile (a ramp along x, 0.8 px over the frame, and a
+// step of 0.1 px between columns 43 and 44, inside a tile): each pixel against the disc of its
+// own diameter. The gather interpolates between a tile's smallest and largest radius
+// (disc_body.cpp); measured max 5.0e-3, rms 9.9e-4 for d 5.6-6.5, and max 2.5e-3, rms 5.6e-4
+// for d 12-12.9. Bound as above, 0.06 / d (max) and a quarter of it (rms).
+TEST(DofBokeh, SmoothFarFieldIsEachPixelsOwnDisc) {
+  constexpr std::ptrdiff_t kFrame = 96;
+  const Image texture = natural_texture(kFrame, 7);
+  for (const float base : {5.6f, 12.f}) {
+    const auto diameter = [=](std::ptrdiff_t x) {
+      return base + 0.8f * float(x) / float(kFrame) + (x >= 44 ? 0.1f : 0.f);
+    };
+    const Image coc = make_coc(kFrame, kFrame, [&](auto x, auto) { return diameter(x); });
+    ASSERT_EQ(dof_detail::smooth_far_tiles(coc.plane(0), 1.f, 2).size(),
+              std::size_t(kFrame / dof_detail::kDiscTile * kFrame / dof_detail::kDiscTile));
+    const Image out = run("bokeh", texture, coc);
+    double worst = 0, squares = 0;
+    for (std::ptrdiff_t x = 0; x < kFrame; ++x) {
+      const BruteDisc disc(diameter(x));
+      for (std::ptrdiff_t y = 0; y < kFrame; ++y) {
+        const double error = std::fabs(out(x, y, 0) - disc.average(texture, x, y));
+        worst = std::max(worst, error);
+        squares += error * error;
+      }
+    }
+    const double rms = std::sqrt(squares / double(kFrame * kFrame));
+    std::printf("[ measured ] CoC %g px and up: max %.2e, rms %.2e against each disc\n", base,
+                worst, rms);
+    EXPECT_LT(worst, 0.06 / base) << "CoC " << base;
+    EXPECT_LT(rms, 0.015 / base) << "CoC " << base;
   }
 }
 

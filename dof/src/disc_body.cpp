@@ -50,55 +50,56 @@ struct PrefixWindow {
   std::ptrdiff_t length() const { return span + 1; }
 };
 
-// The prefix sums of `input` over `window`, the channels in groups of kGroup (the last padded
-// with zeros): entry i of row j, group g is prefix[((j * groups + g) * length + i) * kGroup ...],
-// the sums of the window's first i pixels of that row, a group's channels side by side so that
-// one read of a span's end brings them all.
-constexpr int kGroup = 4;
-
-int channel_groups(int channels) { return (channels + kGroup - 1) / kGroup; }
-
-void row_prefix_sums(const Image& input, const PrefixWindow& window, std::vector<double>& prefix) {
-  const std::ptrdiff_t width = input.width(), length = window.length();
-  const int channels = input.channels(), groups = channel_groups(channels);
-  prefix.resize(std::size_t(window.rows * groups * length * kGroup));
-  for (std::ptrdiff_t j = 0; j < window.rows; ++j) {
-    const std::ptrdiff_t y = fold(window.first_row + j, input.height());
-    for (int g = 0; g < groups; ++g) {
-      const float* source[kGroup] = {};
-      for (int c = 0; c < kGroup && g * kGroup + c < channels; ++c)
-        source[c] = input.plane(g * kGroup + c).row(y);
-      double* sums = prefix.data() + (j * groups + g) * length * kGroup;
-      double sum[kGroup] = {};
-      std::fill(sums, sums + kGroup, 0.0);
-      for (std::ptrdiff_t i = 0; i < window.span; ++i) {
-        const std::ptrdiff_t x = fold(window.first_x + i, width);
-        for (int c = 0; c < kGroup; ++c)
-          sums[(i + 1) * kGroup + c] = sum[c] += source[c] ? double(source[c][x]) : 0.0;
-      }
+// The prefix sums of `input` over `window`, a row per channel: entry i of row j, channel c is
+// prefix[(j * channels + c) * length + i], the sum of the window's first i pixels of that row.
+// Each sum depends on the one before it: kChains rows x channels are summed side by side, so
+// that the adds' latency overlaps (one chain at a time made the sums a third of the gather).
+constexpr std::ptrdiff_t kChains = 8;
+void row_prefix_sums(const Image& input, const PrefixWindow& window, std::vector<double>& prefix,
+                     std::vector<std::ptrdiff_t>& columns) {
+  const std::ptrdiff_t length = window.length();
+  const int channels = input.channels();
+  prefix.resize(std::size_t(window.rows * channels * length));
+  columns.resize(std::size_t(window.span));
+  for (std::ptrdiff_t i = 0; i < window.span; ++i)
+    columns[std::size_t(i)] = fold(window.first_x + i, input.width());
+  const std::ptrdiff_t chains = window.rows * channels;  // (row, channel) pairs, in prefix order
+  for (std::ptrdiff_t first = 0; first < chains; first += kChains) {
+    const std::ptrdiff_t count = std::min(kChains, chains - first);
+    const float* source[kChains];
+    double* sums[kChains];
+    for (std::ptrdiff_t k = 0; k < count; ++k) {
+      const std::ptrdiff_t j = (first + k) / channels;
+      const int c = int((first + k) % channels);
+      source[k] = input.plane(c).row(fold(window.first_row + j, input.height()));
+      sums[k] = prefix.data() + (first + k) * length;
+      sums[k][0] = 0;
+    }
+    double sum[kChains] = {};
+    for (std::ptrdiff_t i = 0; i < window.span; ++i) {
+      const std::ptrdiff_t x = columns[std::size_t(i)];
+      for (std::ptrdiff_t k = 0; k < count; ++k) sums[k][i + 1] = sum[k] += double(source[k][x]);
     }
   }
 }
 
-// A channel group's values, in one vector register. Written as a vector type because GCC 12,
-// left to itself, vectorised the loop over the disc's rows instead (two rows at a time, every
-// read a gather) and ran 3.5 times slower.
-using Group = double __attribute__((vector_size(kGroup * sizeof(double))));
+// The kDiscTile pixels of a tile row, one per vector lane. Written as a vector type: one
+// disc row of all of them is then a few vector loads from the prefix sums (their spans, of
+// one width, start at consecutive pixels).
+using Lanes = double __attribute__((vector_size(kDiscTile * sizeof(double))));
 
-inline Group load_group(const double* from) {
-  Group values;
+inline Lanes load_lanes(const double* from) {
+  Lanes values;
   std::memcpy(&values, from, sizeof values);
   return values;
 }
 
-// The integral over [lo, hi] (pixels as unit boxes, lo <= hi inside the window) of one channel
-// group's prefix-summed row: the sums at both ends, interpolated linearly.
-inline Group span_integral(const double* row, double lo, double hi) {
+// The integrals over [lo + i, hi + i], lane i (pixels as unit boxes, 0 <= lo <= hi inside the
+// window), of a prefix-summed row: the sums at both ends, interpolated linearly.
+inline Lanes span_integrals(const double* row, double lo, double hi) {
   const auto k_lo = static_cast<std::ptrdiff_t>(lo), k_hi = static_cast<std::ptrdiff_t>(hi);
-  const Group at_lo = load_group(row + k_lo * kGroup),
-              next_lo = load_group(row + (k_lo + 1) * kGroup);
-  const Group at_hi = load_group(row + k_hi * kGroup),
-              next_hi = load_group(row + (k_hi + 1) * kGroup);
+  const Lanes at_lo = load_lanes(row + k_lo), next_lo = load_lanes(row + k_lo + 1);
+  const Lanes at_hi = load_lanes(row + k_hi), next_hi = load_lanes(row + k_hi + 1);
   return (at_hi + (hi - double(k_hi)) * (next_hi - at_hi)) -
          (at_lo + (lo - double(k_lo)) * (next_lo - at_lo));
 }
@@ -125,112 +126,81 @@ inline double half_strip_area(double r, double t) {
   return t * std::sqrt(std::max(r * r - t * t, 0.0)) + r * r * asin_unit(std::min(t / r, 1.0));
 }
 
-// The disc averages at n <= kDiscTile pixels of row y, at columns xs[0 .. n), written to
-// to[c * stride + i], the block's prefix sums made. Row dy of a disc of radius r (r >= 1/2) is
-// the span of the disc's area in the strip [dy - 1/2, dy + 1/2], centred: the rows hold the
-// disc's area exactly, and a row enters (dy = r + 1/2) with width 0, so the average is
-// continuous in r. Rows dy and -dy share their span. The half widths are computed first, the
-// pixels in vector lanes (`half_widths`, row dy's at [dy * kDiscTile ...]; unused lanes repeat
-// the first pixel), then each pixel's reads.
-void gather_points(ConstPlane coc, std::ptrdiff_t y, const std::ptrdiff_t* xs, std::ptrdiff_t n,
-                   const std::vector<double>& prefix, const PrefixWindow& window, int channels,
-                   std::vector<double>& half_widths, float* to, std::ptrdiff_t stride) {
-  const int groups = channel_groups(channels);
-  const std::ptrdiff_t group_stride = window.length() * kGroup, row_stride = group_stride * groups;
-  double radius[kDiscTile], below[kDiscTile], weight[kDiscTile];
-  double largest = 0;
-  for (std::ptrdiff_t i = 0; i < kDiscTile; ++i) {
-    radius[i] = 0.5 * std::fabs(double(coc(xs[i < n ? i : 0], y)));
-    largest = std::max(largest, radius[i]);
-  }
-  const auto reach = static_cast<std::ptrdiff_t>(largest + 0.5);
-  half_widths.resize(std::size_t((reach + 1) * kDiscTile));
-  double* widths = half_widths.data();
+// The half widths of the rows dy = 0 .. floor(r + 1/2) of the disc of radius r >= 1/2 (into
+// `half_widths`), and their total weight (the disc's area): row dy is the span of the disc's
+// area in the strip [dy - 1/2, dy + 1/2], centred. The rows hold the disc's area exactly, and a
+// row enters (dy = r + 1/2) with width 0, so the average is continuous in r.
+double disc_rows(double r, std::vector<double>& half_widths) {
+  const auto rows = static_cast<std::ptrdiff_t>(r + 0.5);
+  half_widths.resize(std::size_t(rows + 1));
+  double* h = half_widths.data();
+  // The areas below each row's upper edge first, in vector lanes; then their differences.
 #pragma omp simd
-  for (std::ptrdiff_t i = 0; i < kDiscTile; ++i) {
-    below[i] = half_strip_area(radius[i], std::min(0.5, radius[i]));
-    widths[i] = below[i];
-    weight[i] = 2 * below[i];
+  for (std::ptrdiff_t dy = 0; dy <= rows; ++dy)
+    h[dy] = half_strip_area(r, std::min(double(dy) + 0.5, r));
+  double below = h[0], weight = 2 * h[0];
+  for (std::ptrdiff_t dy = 1; dy <= rows; ++dy) {
+    const double above = h[dy];
+    h[dy] = std::max(0.5 * (above - below), 0.0);  // 0 past the disc
+    below = above;
+    weight += 4 * h[dy];
   }
-  for (std::ptrdiff_t dy = 1; dy <= reach; ++dy) {
-#pragma omp simd
-    for (std::ptrdiff_t i = 0; i < kDiscTile; ++i) {
-      const double above = half_strip_area(radius[i], std::min(double(dy) + 0.5, radius[i]));
-      const double h = std::max(0.5 * (above - below[i]), 0.0);  // 0 past the disc
-      below[i] = above;
-      widths[dy * kDiscTile + i] = h;
-      weight[i] += 4 * h;
-    }
-  }
-  for (std::ptrdiff_t i = 0; i < n; ++i) {
-    const double centre = double(xs[i] - window.first_x) + 0.5;
-    const auto rows = static_cast<std::ptrdiff_t>(radius[i] + 0.5);
-    for (int g = 0; g < groups; ++g) {
-      const double* row = prefix.data() + (y - window.first_row) * row_stride + g * group_stride;
-      Group sum = span_integral(row, centre - widths[i], centre + widths[i]);
-      for (std::ptrdiff_t dy = 1; dy <= rows; ++dy) {
-        const double h = widths[dy * kDiscTile + i];
-        sum += span_integral(row - dy * row_stride, centre - h, centre + h) +
-               span_integral(row + dy * row_stride, centre - h, centre + h);
-      }
-      for (int c = 0; c < kGroup && g * kGroup + c < channels; ++c)
-        to[(g * kGroup + c) * stride + i] = static_cast<float>(sum[c] / weight[i]);
-    }
-  }
+  return weight;
 }
 
-// The samples of a sparse tile: every kSparseStep pixels from its corner, through the corner of
-// the next tile (kSparseSamples a side).
-constexpr std::ptrdiff_t kSparseStep = 2, kSparseSamples = kDiscTile / kSparseStep + 1;
-
-// Whether a tile is gathered at kSparseSamples² points and interpolated bilinearly: a whole
-// tile, not on the frame's last row or column of tiles, whose radii are all kSparseRadius or
-// more. A disc of radius r passes 2 J1(a) / a of a texture of wavelength λ, a = 2 π r / λ; at the
-// shortest wavelength the interpolation misses, 2 kSparseStep = 4 px, and r >= 8 that is below
-// 0.03 (and falling as r^-3/2), against 0.07 at r = 4.
-constexpr double kSparseRadius = 8;
-bool is_sparse(const Rect& tile, ConstPlane coc) {
-  if (tile.width != kDiscTile || tile.height != kDiscTile || tile.x + kDiscTile >= coc.width() ||
-      tile.y + kDiscTile >= coc.height())
-    return false;
-  for (std::ptrdiff_t y = tile.y; y < tile.y + tile.height; ++y)
-    for (std::ptrdiff_t x = tile.x; x < tile.x + tile.width; ++x)
-      if (!(0.5 * std::fabs(double(coc(x, y))) >= kSparseRadius)) return false;
-  return true;
+// The averages over the disc of radius r of the kDiscTile pixels of row y from column x0, one
+// channel: rows dy and -dy share their span.
+Lanes disc_averages(const double* prefix, const PrefixWindow& window, int channels, int channel,
+                    std::ptrdiff_t y, std::ptrdiff_t x0, const std::vector<double>& half_widths,
+                    double weight) {
+  const std::ptrdiff_t row_stride = window.length() * channels;
+  const double* row = prefix + (y - window.first_row) * row_stride + channel * window.length();
+  const double centre = double(x0 - window.first_x) + 0.5;
+  Lanes sum = span_integrals(row, centre - half_widths[0], centre + half_widths[0]);
+  for (std::size_t dy = 1; dy < half_widths.size(); ++dy) {
+    const double h = half_widths[dy];
+    const auto offset = std::ptrdiff_t(dy) * row_stride;
+    sum += span_integrals(row - offset, centre - h, centre + h) +
+           span_integrals(row + offset, centre - h, centre + h);
+  }
+  return sum / weight;
 }
 
-// The disc averages of one tile (tile.area() values a channel, row-major, into out).
+// The disc averages of one tile (tile.area() values a channel, row-major, into out). Each tile
+// row is gathered with the smallest and the largest radius of the tile, the lanes its pixels,
+// and each pixel takes the average at its own radius interpolated linearly between the two:
+// exact for constants and linear ramps (both are), and the average is smooth in r (the radii
+// of a smooth tile differ by at most kSmoothCocPx / 2; a row entering at the larger radius
+// holds an area of order (Δr)^(3/2) sqrt(r), 0.7 % of the disc at r = 5, Δr = 1/4, of which
+// the interpolation misses a fraction). A tile of one radius is gathered once.
 void gather_tile(const Rect& tile, ConstPlane coc, const std::vector<double>& prefix,
-                 const PrefixWindow& window, int channels, std::vector<double>& half_widths,
-                 std::vector<float>& samples, float* out) {
+                 const PrefixWindow& window, int channels, std::vector<double>& small_rows,
+                 std::vector<double>& large_rows, float* out) {
   const std::ptrdiff_t area = tile.area();
-  std::ptrdiff_t xs[kDiscTile];
-  if (!is_sparse(tile, coc)) {
-    for (std::ptrdiff_t i = 0; i < tile.width; ++i) xs[i] = tile.x + i;
-    for (std::ptrdiff_t y = tile.y; y < tile.y + tile.height; ++y)
-      gather_points(coc, y, xs, tile.width, prefix, window, channels, half_widths,
-                    out + (y - tile.y) * tile.width, area);
-    return;
-  }
-  constexpr std::ptrdiff_t kCount = kSparseSamples * kSparseSamples;
-  samples.resize(std::size_t(kCount * channels));
-  for (std::ptrdiff_t i = 0; i < kSparseSamples; ++i) xs[i] = tile.x + i * kSparseStep;
-  for (std::ptrdiff_t j = 0; j < kSparseSamples; ++j)
-    gather_points(coc, tile.y + j * kSparseStep, xs, kSparseSamples, prefix, window, channels,
-                  half_widths, samples.data() + j * kSparseSamples, kCount);
-  for (int c = 0; c < channels; ++c) {
-    const float* grid = samples.data() + c * kCount;
-    for (std::ptrdiff_t y = 0; y < kDiscTile; ++y) {
-      const std::ptrdiff_t j = y / kSparseStep;
-      const float fy = float(y % kSparseStep) / float(kSparseStep);
-      for (std::ptrdiff_t x = 0; x < kDiscTile; ++x) {
-        const std::ptrdiff_t i = x / kSparseStep;
-        const float fx = float(x % kSparseStep) / float(kSparseStep);
-        const float* cell = grid + j * kSparseSamples + i;
-        const float top = cell[0] + fx * (cell[1] - cell[0]);
-        const float bottom =
-            cell[kSparseSamples] + fx * (cell[kSparseSamples + 1] - cell[kSparseSamples]);
-        out[c * area + y * kDiscTile + x] = top + fy * (bottom - top);
+  double smallest = INFINITY, largest = 0;
+  for (std::ptrdiff_t y = tile.y; y < tile.y + tile.height; ++y)
+    for (std::ptrdiff_t x = tile.x; x < tile.x + tile.width; ++x) {
+      smallest = std::min(smallest, 0.5 * std::fabs(double(coc(x, y))));
+      largest = std::max(largest, 0.5 * std::fabs(double(coc(x, y))));
+    }
+  const double small_weight = disc_rows(smallest, small_rows);
+  const bool uniform = largest == smallest;
+  const double large_weight = uniform ? 0 : disc_rows(largest, large_rows);
+  for (std::ptrdiff_t y = tile.y; y < tile.y + tile.height; ++y) {
+    const float* c = coc.row(y) + tile.x;
+    for (int channel = 0; channel < channels; ++channel) {
+      const Lanes at_small = disc_averages(prefix.data(), window, channels, channel, y, tile.x,
+                                           small_rows, small_weight);
+      float* to = out + channel * area + (y - tile.y) * tile.width;
+      if (uniform) {
+        for (std::ptrdiff_t x = 0; x < tile.width; ++x) to[x] = static_cast<float>(at_small[x]);
+        continue;
+      }
+      const Lanes at_large = disc_averages(prefix.data(), window, channels, channel, y, tile.x,
+                                           large_rows, large_weight);
+      for (std::ptrdiff_t x = 0; x < tile.width; ++x) {
+        const double t = (0.5 * std::fabs(double(c[x])) - smallest) / (largest - smallest);
+        to[x] = static_cast<float>(at_small[x] + t * (at_large[x] - at_small[x]));
       }
     }
   }
@@ -240,7 +210,8 @@ void gather_tile(const Rect& tile, ConstPlane coc, const std::vector<double>& pr
 // reach, then each tile.
 void gather_band(const Image& input, ConstPlane coc, const Rect* tiles, std::size_t count,
                  const std::size_t* offsets, std::vector<double>& prefix,
-                 std::vector<double>& half_widths, std::vector<float>& samples, float* values) {
+                 std::vector<double>& small_rows, std::vector<double>& large_rows,
+                 std::vector<std::ptrdiff_t>& columns, float* values) {
   float radius = 0;
   std::ptrdiff_t top = tiles[0].y, bottom = top, left = tiles[0].x, right = left;
   for (std::size_t t = 0; t < count; ++t) {
@@ -251,18 +222,17 @@ void gather_band(const Image& input, ConstPlane coc, const Rect* tiles, std::siz
     top = std::min(top, tile.y);
     bottom = std::max(bottom, tile.y + tile.height);
     left = std::min(left, tile.x);
-    right = std::max(right, tile.x + tile.width);
+    right = std::max(right, tile.x + kDiscTile);  // every lane, past a narrow tile too
   }
-  // Rows above and below: the largest radius, rounded as the gather rounds it, plus 1/2 for the
-  // samples of a sparse tile in the next tile's corner (whose CoC may be kSmoothCocPx larger),
-  // which also needs a row and a column more.
-  const auto reach = static_cast<std::ptrdiff_t>(radius + 0.5f + 0.5f * kSmoothCocPx);
-  const std::ptrdiff_t pad = reach + 3;  // columns: the span's ends, rounded out
+  // Rows above and below: the largest radius, rounded as the gather rounds it. Columns: that,
+  // and the span's ends rounded out.
+  const auto reach = static_cast<std::ptrdiff_t>(radius + 0.5f);
+  const std::ptrdiff_t pad = reach + 3;
   const PrefixWindow window{top - reach, bottom - top + 2 * reach + 1, left - pad,
                             right - left + 2 * pad};
-  row_prefix_sums(input, window, prefix);
+  row_prefix_sums(input, window, prefix, columns);
   for (std::size_t t = 0; t < count; ++t)
-    gather_tile(tiles[t], coc, prefix, window, input.channels(), half_widths, samples,
+    gather_tile(tiles[t], coc, prefix, window, input.channels(), small_rows, large_rows,
                 values + offsets[t]);
 }
 
@@ -312,13 +282,14 @@ DiscTiles gather_discs(const Image& input, ConstPlane coc, std::vector<Rect> til
   const auto bands = std::ptrdiff_t(band_starts.size()) - 1;
 #pragma omp parallel num_threads(threads)
   {
-    std::vector<double> prefix, half_widths;
-    std::vector<float> samples;
+    std::vector<double> prefix, small_rows, large_rows;
+    std::vector<std::ptrdiff_t> columns;
 #pragma omp for schedule(dynamic, 1)
     for (std::ptrdiff_t b = 0; b < bands; ++b) {
       const std::size_t first = band_starts[std::size_t(b)];
       gather_band(input, coc, discs.tiles.data() + first, band_starts[std::size_t(b) + 1] - first,
-                  discs.offsets.data() + first, prefix, half_widths, samples, discs.values.data());
+                  discs.offsets.data() + first, prefix, small_rows, large_rows, columns,
+                  discs.values.data());
     }
   }
   return discs;

@@ -25,11 +25,12 @@
 // with r. Both ends of a span are read from the row's prefix sums (in double), interpolated
 // linearly: the exact integral of the row (pixels as boxes) over the span, so the ends are
 // anti-aliased. The weight is the sum of the strips' areas, pi r². Rows and columns beyond the
-// frame fold as a mirror (fold(), as scatter's splats do). Tiles whose radii are all 8 px or
-// more are gathered every 2 px and interpolated (disc_body.cpp, kSparseRadius). Cost: per pixel
-// 2 floor(r + 1/2) + 1 rows, two interpolated reads a row per group of four channels, O(r) and
-// not O(r²); per block of 32 x 128 pixels, prefix sums over (32 + 2 r) x (128 + 2 r) pixels,
-// which kMaxDiscCocPx bounds.
+// frame fold as a mirror (fold(), as scatter's splats do). The 8 pixels of a tile row are
+// gathered together, in vector lanes, with one radius (their spans then start at consecutive
+// pixels): the tile's smallest and its largest, each pixel interpolating linearly between the
+// two at its own (disc_body.cpp). Cost: per tile row and channel, 2 floor(r + 1/2) + 1 rows of
+// four 8-lane reads, once or twice; O(r) a pixel, not O(r²). Per block of 32 x 128 pixels,
+// prefix sums over (32 + 2 r) x (128 + 2 r) pixels, which kMaxDiscCocPx bounds.
 //
 // Precision: the prefix sums are in double; a value above about 1e13 times the others in the
 // same block's window (an in-focus pixel in the same rows, not clamped as a highlight) costs

@@ -17,8 +17,8 @@
 //    splatted with the aperture's footprint for its CoC (aperture_footprint.hpp, the same
 //    weights as scatter's splat: anti-aliased, area-normalised, mirror-folded at the border).
 // With g = 1 body + sprites carry exactly the input's energy (adi conserves it per row and
-// column, the disc gather for a uniform CoC up to the interpolation of its sparse tiles, a
-// sprite's weights sum to 1). A frame without highlights is the body alone.
+// column, the disc gather for a uniform CoC (its weights are symmetric and fold as a mirror),
+// a sprite's weights sum to 1). A frame without highlights is the body alone.
 //
 // Depth. A sprite lies behind nearer geometry: its weight at a covered pixel p is multiplied
 // by the visibility clamp(c_p - c_h + 2, 0, 1) of the signed CoCs (negative = near) of p and
