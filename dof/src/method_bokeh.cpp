@@ -149,16 +149,19 @@ Sprites find_highlights(const DofFrame& frame, const HighlightBoost& boost,
   return sprites;
 }
 
-// The frame with every highlight's largest channel clamped to the threshold, hue kept.
-Image clamp_highlights(const DofFrame& frame, const Sprites& sprites, float threshold) {
+// out = the frame with every highlight's largest channel clamped to kBodyKeeps times the
+// threshold, hue kept. out keeps its buffer when it has the frame's shape already (a caller
+// that reuses it, as a video loop would, then pays no fresh pages for it).
+void clamp_highlights(Image& out, const DofFrame& frame, const Sprites& sprites, float threshold) {
+  if (out.width() != frame.width() || out.height() != frame.height() ||
+      out.channels() != frame.channels())
+    out.reset(frame.width(), frame.height(), frame.channels());
   // Copied on the frame's threads: the copy's first touch of fresh memory is most of its cost.
-  Image body(frame.width(), frame.height(), frame.channels());
-  copy_image(body, frame.color(), frame.threads());
+  if (&out != &frame.color()) copy_image(out, frame.color(), frame.threads());
   for (const Highlight& light : sprites.lights) {
-    const float scale = kBodyKeeps * threshold / largest_channel(body, light.x, light.y);
-    for (int c = 0; c < body.channels(); ++c) body(light.x, light.y, c) *= scale;
+    const float scale = kBodyKeeps * threshold / largest_channel(out, light.x, light.y);
+    for (int c = 0; c < out.channels(); ++c) out(light.x, light.y, c) *= scale;
   }
-  return body;
 }
 
 // How much of a sprite of signed CoC `light_coc` shows at a pixel of signed CoC `coc`: the
@@ -292,9 +295,8 @@ void run_bokeh(Image& out, const DofFrame& frame, const DofOptions& settings, Do
   if (sprites.lights.empty()) {
     run_body(out, frame, settings, body_report);
   } else {
-    Image body = clamp_highlights(frame, sprites, boost.threshold);
-    run_body(body, DofFrame(frame, body), settings, body_report);  // in place
-    out = std::move(body);
+    clamp_highlights(out, frame, sprites, boost.threshold);
+    run_body(out, DofFrame(frame, out), settings, body_report);  // in place
   }
   report.skipped_fraction = body_report.skipped_fraction;
   report.layered = body_report.layered;
