@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <complex>
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
@@ -13,6 +14,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -45,14 +47,65 @@ enum class Method {
   Pivoting,                 // partial pivoting, the algorithm of LAPACK ?gtsv
 };
 
+namespace detail {
+
+// One system by a method's scalar kernel (detail/): the arguments every kernel takes, and
+// pcr_below, which only the reductions read. Returns -1, or the row where the numbers broke
+// down. `work` holds MethodRow::workspace(n) scalars.
+template <class T>
+using Kernel = std::ptrdiff_t (*)(std::ptrdiff_t n, Strided<const T> a, Strided<const T> b,
+                                  Strided<const T> c, Strided<const T> d, Strided<T> x, T* work,
+                                  std::ptrdiff_t pcr_below);
+
+// A method's kernel for each scalar type the solvers take.
+struct KernelSet {
+  Kernel<float> for_float = nullptr;
+  Kernel<double> for_double = nullptr;
+  Kernel<std::complex<float>> for_complex_float = nullptr;
+  Kernel<std::complex<double>> for_complex_double = nullptr;
+
+  template <class T>
+  constexpr Kernel<T> get() const {
+    if constexpr (std::is_same_v<T, float>)
+      return for_float;
+    else if constexpr (std::is_same_v<T, double>)
+      return for_double;
+    else if constexpr (std::is_same_v<T, std::complex<float>>)
+      return for_complex_float;
+    else
+      return for_complex_double;
+  }
+  constexpr bool complete() const {
+    return for_float && for_double && for_complex_float && for_complex_double;
+  }
+};
+
+// The KernelSet of a kernel written once for every type: a generic lambda with Kernel's
+// parameters, instantiated for each.
+template <class Solve>
+constexpr KernelSet kernel_set(Solve solve) {
+  return {solve, solve, solve, solve};
+}
+
+}  // namespace detail
+
 // The solver methods, one row each: the name the command line, the benchmarks and the error
-// messages use, whether the method pivots, and what it is. Adding a method is its kernel header
-// (detail/), one row here, and one case in detail::solve_one.
+// messages use, whether the method pivots, what it is, and how it runs: its kernel, its
+// workspace, and whether its answers are checked for cancellation. Everything that
+// dispatches on a method reads this table (to_string, method_named, kAllMethods,
+// detail::solve_one, the benchmark names and the test bounds): adding a method is its kernel
+// header (detail/), its name in Method, and one row here.
 struct MethodRow {
   Method method;
   const char* name;
   bool pivot_free;  // stable only for diagonally dominant matrices (SolveOptions::check_dominance)
   const char* summary;
+  detail::KernelSet kernels = {};                           // none for Auto: it picks another row's
+  std::ptrdiff_t (*workspace)(std::ptrdiff_t n) = nullptr;  // scalars the kernel needs
+  // Check the backward error of every answer against reduction_backward_bound: the reductions
+  // pass the vanishing-pivot test at every level while cancellation builds up over the levels
+  // (PCR on gallery('dorr', 512, 1e-4), dominant, returned x with a backward error of 0.5).
+  bool checks_backward_error = false;
 };
 
 inline constexpr MethodRow kMethodTable[] = {
@@ -63,24 +116,56 @@ inline constexpr MethodRow kMethodTable[] = {
     {.method = Method::Thomas,
      .name = "thomas",
      .pivot_free = true,
-     .summary = "elimination without pivoting; batches run one SIMD lane per system"},
+     .summary = "elimination without pivoting; batches run one SIMD lane per system",
+     .kernels =
+         detail::kernel_set([](std::ptrdiff_t n, auto a, auto b, auto c, auto d, auto x, auto* work,
+                               std::ptrdiff_t) { return detail::thomas(n, a, b, c, d, x, work); }),
+     .workspace = detail::thomas_workspace},
     {.method = Method::CyclicReduction,
      .name = "cr",
      .pivot_free = true,
-     .summary = "odd-even cyclic reduction (seed 000 §3.5.3), any n"},
+     .summary = "odd-even cyclic reduction (seed 000 §3.5.3), any n",
+     .kernels = detail::kernel_set(
+         [](std::ptrdiff_t n, auto a, auto b, auto c, auto d, auto x, auto* work, std::ptrdiff_t) {
+           return detail::cyclic_reduction(n, a, b, c, d, x, work, 1);
+         }),
+     .workspace = detail::cyclic_reduction_workspace,
+     .checks_backward_error = true},
     {.method = Method::ParallelCyclicReduction,
      .name = "pcr",
      .pivot_free = true,
-     .summary = "parallel cyclic reduction: every row reduced at once, log2(n) steps"},
+     .summary = "parallel cyclic reduction: every row reduced at once, log2(n) steps",
+     .kernels = detail::kernel_set(
+         [](std::ptrdiff_t n, auto a, auto b, auto c, auto d, auto x, auto* work, std::ptrdiff_t) {
+           return detail::cyclic_reduction(n, a, b, c, d, x, work, n);
+         }),
+     .workspace = detail::cyclic_reduction_workspace,
+     .checks_backward_error = true},
     {.method = Method::Hybrid,
      .name = "cr-pcr",
      .pivot_free = true,
-     .summary = "cyclic reduction down to hybrid_pcr_below rows, finished by PCR"},
+     .summary = "cyclic reduction down to hybrid_pcr_below rows, finished by PCR",
+     .kernels = detail::kernel_set([](std::ptrdiff_t n, auto a, auto b, auto c, auto d, auto x,
+                                      auto* work, std::ptrdiff_t pcr_below) {
+       return detail::cyclic_reduction(n, a, b, c, d, x, work, pcr_below);
+     }),
+     .workspace = detail::cyclic_reduction_workspace,
+     .checks_backward_error = true},
     {.method = Method::Pivoting,
      .name = "pivoting",
      .pivot_free = false,
-     .summary = "partial pivoting, the algorithm of LAPACK ?gtsv"},
+     .summary = "partial pivoting, the algorithm of LAPACK ?gtsv",
+     .kernels = detail::kernel_set(
+         [](std::ptrdiff_t n, auto a, auto b, auto c, auto d, auto x, auto* work, std::ptrdiff_t) {
+           return detail::pivoting(n, a, b, c, d, x, work);
+         }),
+     .workspace = detail::pivoting_workspace},
 };
+
+// Every row but Auto's runs: a kernel for each type, and its workspace.
+static_assert(std::ranges::all_of(kMethodTable, [](const MethodRow& row) {
+  return row.method == Method::Auto || (row.kernels.complete() && row.workspace != nullptr);
+}));
 
 inline constexpr auto kAllMethods = [] {
   std::array<Method, std::size(kMethodTable)> methods{};
@@ -372,29 +457,23 @@ real_t<T> reduction_backward_bound(std::ptrdiff_t n) {
   return 8 * epsilon<T> * real_t<T>(1 + levels);
 }
 
-// Solves one system with one non-Auto method; throws on breakdown.
+// Solves one system with one non-Auto method (its row's kernel); throws on breakdown.
 template <class T>
 void solve_one(const SystemView<T>& s, Strided<T> x, Method method, bool periodic,
                std::ptrdiff_t pcr_below, AlignedBuffer<T>& work, std::ptrdiff_t system) {
+  const MethodRow& row = method_row(method);
+  const Kernel<T> kernel = row.kernels.template get<T>();
+  if (!kernel) throw InvalidArgument("method", std::string(row.name) + " has no kernel of its own");
   auto inner = [&](std::ptrdiff_t n, Strided<const T> a, Strided<const T> b, Strided<const T> c,
-                   Strided<const T> d, Strided<T> out, T* w) -> std::ptrdiff_t {
-    switch (method) {
-      case Method::Thomas: return thomas(n, a, b, c, d, out, w);
-      case Method::Pivoting: return pivoting(n, a, b, c, d, out, w);
-      case Method::CyclicReduction: return cyclic_reduction(n, a, b, c, d, out, w, 1);
-      case Method::ParallelCyclicReduction: return cyclic_reduction(n, a, b, c, d, out, w, n);
-      default: return cyclic_reduction(n, a, b, c, d, out, w, pcr_below);
-    }
-  };
+                   Strided<const T> d, Strided<T> out,
+                   T* w) { return kernel(n, a, b, c, d, out, w, pcr_below); };
   const std::ptrdiff_t n = s.n;
   // Inputs are checked up front: pivoting and the reductions can turn an infinite coefficient
   // into a finite, meaningless answer, and a NaN in rhs is named here rather than after it has
   // spread. A small cost next to these scalar kernels.
   require_finite_matrix(s, system);
   require_finite_rhs(s, system);
-  const std::ptrdiff_t inner_work = method == Method::Thomas     ? n
-                                    : method == Method::Pivoting ? pivoting_workspace(n)
-                                                                 : cyclic_reduction_workspace(n);
+  const std::ptrdiff_t inner_work = row.workspace(n);
   // The solution is built in the workspace and copied out only on success, so a failed
   // in-place solve leaves rhs as it was.
   work.resize(2 * n + (periodic ? periodic_workspace(n, inner_work) : inner_work));
@@ -409,11 +488,9 @@ void solve_one(const SystemView<T>& s, Strided<T> x, Method method, bool periodi
       });
   if (bad >= 0) report_breakdown(s, system, bad, to_string(method));
   require_finite_solution(result, n, system, to_string(method));
-  if (method == Method::CyclicReduction || method == Method::ParallelCyclicReduction ||
-      method == Method::Hybrid) {
+  if (row.checks_backward_error) {
     // Every level of a reduction passes the vanishing-pivot test, yet cancellation can build
-    // up over the levels: PCR on gallery('dorr', 512, 1e-4), dominant, returned x with a
-    // backward error of 0.5 in double. The check costs one pass, less than a level.
+    // up over the levels (MethodRow::checks_backward_error). One pass, less than a level.
     const BackwardError error = backward_error(s, Strided<const T>{result, 1});
     const long double bound = reduction_backward_bound<T>(n);
     if (!(error.value <= bound))

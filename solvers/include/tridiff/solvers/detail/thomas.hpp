@@ -13,8 +13,11 @@
 
 namespace tridiff::detail {
 
+// Scalars of workspace `thomas` needs for a system of n rows.
+inline std::ptrdiff_t thomas_workspace(std::ptrdiff_t n) { return n; }
+
 // Solves one system; x may alias d (in place). a[0] and c[n-1] are never read.
-// `work` holds n scalars. Returns -1, or the row whose pivot vanished.
+// `work` holds thomas_workspace(n) scalars. Returns -1, or the row whose pivot vanished.
 template <class T>
 std::ptrdiff_t thomas(std::ptrdiff_t n, Strided<const T> a, Strided<const T> b, Strided<const T> c,
                       Strided<const T> d, Strided<T> x, T* work) {
