@@ -111,8 +111,13 @@ inline __mmask16 first_columns(std::ptrdiff_t columns) {
 template <class V>
 inline void prefetch_values(const V* p, std::ptrdiff_t count, bool write = false) {
   constexpr std::ptrdiff_t kLine = 64 / sizeof(V) > 0 ? 64 / sizeof(V) : 1;
-  for (std::ptrdiff_t k = 0; k < count; k += kLine)
-    write ? __builtin_prefetch(p + k, 1) : __builtin_prefetch(p + k, 0);
+  // An if, not a conditional expression of the two calls: clang 14 crashed on that at -O0.
+  for (std::ptrdiff_t k = 0; k < count; k += kLine) {
+    if (write)
+      __builtin_prefetch(p + k, 1);
+    else
+      __builtin_prefetch(p + k, 0);
+  }
 }
 
 // block[k * W + l] = rows[l][x + k] for k < columns, l < W: W rows anywhere in memory (a band
