@@ -891,6 +891,32 @@ TEST(DofInput, DiffusionNamesTheCocWhoseConductanceOverflows) {
     }
 }
 
+// The same refusal leaves the output as it was, also where bokeh has highlights to clamp (it
+// clamps them into the output buffer, once did so before the check, and lost the caller's
+// values).
+TEST(DofInput, OverflowingConductanceLeavesTheOutputUntouched) {
+  Image color = random_image(37, 21, 3, 0.f, 1.f, 5);
+  color(10, 10, 1) = 50.f;  // a highlight for bokeh
+  Image coc = make_coc(37, 21, [](auto, auto) { return 8.f; });
+  coc(30, 5, 0) = 1e20f;
+  const Image before = random_image(37, 21, 3, 0.f, 1.f, 9);
+  for (const char* name : {"adi", "mpad", "bokeh"})
+    for (bool layers : {false, true}) {
+      DofOptions settings;
+      settings.layers = layers;
+      Image out = before;
+      EXPECT_THROW(depth_of_field(out, color, coc.plane(0), find_dof_method(name), settings),
+                   InvalidArgument)
+          << name;
+      std::ptrdiff_t changed = 0;
+      for (int ch = 0; ch < 3; ++ch)
+        for (std::ptrdiff_t y = 0; y < 21; ++y)
+          for (std::ptrdiff_t x = 0; x < 37; ++x)
+            changed += !same_bits(out(x, y, ch), before(x, y, ch));
+      EXPECT_EQ(changed, 0) << name << (layers ? " layers" : "");
+    }
+}
+
 // The frame is checked before a method starts: a refused input leaves the output as it was.
 TEST(DofInput, RefusedInputLeavesTheOutputUntouched) {
   Image color = random_image(40, 30, 3, 0.f, 1.f, 3);

@@ -210,6 +210,8 @@ void layered_dof(Image& out, const DofFrame& frame, const NearLayer& near,
   report.skipped_fraction = diffusion.skipped_fraction();
 }
 
+}  // namespace
+
 // Every pixel's conductance must be finite: a finite CoC above about 1.8e19 px has none. The
 // largest |CoC| decides (the conductance grows with it); the slow path names the first pixel.
 void require_finite_conductance(const DofFrame& frame, const CocConductance& conductance) {
@@ -225,8 +227,6 @@ void require_finite_conductance(const DofFrame& frame, const CocConductance& con
                                          "; it must be finite and >= 0");
     }
 }
-
-}  // namespace
 
 LinkField coc_links(ConstPlane coc, const CocConductance& conductance, int threads) {
   return links_from_pixels(coc, conductance, threads);

@@ -33,6 +33,11 @@ using Diffuser =
     std::function<DiffusionReport(Image& dst, const Image& src, ConstPlane coc,
                                   const CocConductance& conductance, const DiffusionOptions&)>;
 
+// Throws InvalidArgument("coc") naming the first pixel whose conductance is not finite (a
+// finite CoC above about 1.8e19 px has none). diffusion_dof checks it first; a method that
+// writes to `out` before calling diffusion_dof checks it before that.
+void require_finite_conductance(const DofFrame& frame, const CocConductance& conductance);
+
 // The links of `conductance` as a LinkField (for the explicit methods).
 LinkField coc_links(ConstPlane coc, const CocConductance& conductance, int threads);
 

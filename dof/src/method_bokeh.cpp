@@ -291,6 +291,9 @@ void run_bokeh(Image& out, const DofFrame& frame, const DofOptions& settings, Do
   const Sprites sprites = find_highlights(frame, boost, footprint);
   stages.end("highlights");
 
+  // Refused before `out` is written (the clamped copy goes there): a failed call leaves it.
+  dof_detail::require_finite_conductance(
+      frame, dof_detail::CocConductance{settings.in_focus_coc_px, kBodySpread});
   DofReport body_report;
   if (sprites.lights.empty()) {
     run_body(out, frame, settings, body_report);
