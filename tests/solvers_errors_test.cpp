@@ -1093,6 +1093,13 @@ TEST(SolverMethodTable, EveryMethodOnceAndByName) {
   EXPECT_FALSE(is_pivot_free(Method::Auto));
   EXPECT_FALSE(is_pivot_free(Method::Pivoting));
   EXPECT_TRUE(is_pivot_free(Method::Hybrid));
+  // Every row but Auto's runs on its own: a kernel for each scalar type, and a workspace.
+  // (Checked here, not by a static_assert: GCC's sanitizer builds do not fold the kernels'
+  // addresses to constants.)
+  for (const MethodRow& row : kMethodTable) {
+    const bool runs = row.kernels.complete() && row.workspace != nullptr;
+    EXPECT_EQ(runs, row.method != Method::Auto) << row.name;
+  }
   try {
     method_named("hybrid");
     ADD_FAILURE() << "no error";
