@@ -31,6 +31,7 @@
 //                     per method and scene, and reported on the rows of every size: the
 //                     reference is slow, and the scenes are the same at every size (their CoC
 //                     in pixels does not scale, except `procedural`'s)
+//   ms <stage>        the last run's DofReport::stages, in ms (e.g. "ms body discs")
 //   psnr_vs_truth, ssim_vs_truth
 //                     the ray-traced scenes (procedural, lamps) only: score_against_truth()
 //                     (quality.hpp: sRGB PSNR / SSIM) of the method's output on the scene at
@@ -320,6 +321,10 @@ void bm_method(benchmark::State& state, const DofMethod& method, const std::stri
   set_counters(state, width, height, threads, report.skipped_fraction);
   state.counters["work_fraction"] = cached.work_fraction;
   if (report.explicit_steps) state.counters["steps"] = report.explicit_steps;
+  // The last run's stages (DofReport::stages, as `tridiff dof` prints them), in ms: where the
+  // time goes, measured in the same run as the total.
+  for (const DofStage& stage : report.stages)
+    state.counters["ms " + stage.name] = stage.seconds * 1e3;
   if (focus_percent >= 0) return;
   // The error run at 1024^2 with 2 threads costs about the 1024^2 estimate (and the reference
   // once per scene); the guard above already admitted a run of this size or larger.
