@@ -562,10 +562,7 @@ constexpr int kThreadCounts[] = {1, 2};
 // the single shape is registered with 1 thread only: threads:2 would repeat the same
 // measurement at that price. The other methods and the LAPACK peer keep threads:2 there, which
 // shows whether one long system gains from a second thread.
-bool is_reduction(Method method) {
-  return method == Method::CyclicReduction || method == Method::ParallelCyclicReduction ||
-         method == Method::Hybrid;
-}
+bool is_reduction(Method method) { return method_row(method).reduction; }
 
 // Every benchmark is timed on the wall clock: the work runs on OpenMP threads, and the CPU
 // time Google Benchmark measures is the main thread's alone.

@@ -169,9 +169,7 @@ long double unit_roundoff() {
 template <class T>
 long double backward_bound(Method method, std::ptrdiff_t n) {
   const long double levels = std::ceil(std::log2(static_cast<long double>(n) + 1));
-  const bool reduces = method == Method::CyclicReduction ||
-                       method == Method::ParallelCyclicReduction || method == Method::Hybrid;
-  return 16 * unit_roundoff<T>() * (reduces ? 1 + levels : 1);
+  return 16 * unit_roundoff<T>() * (method_row(method).reduction ? 1 + levels : 1);
 }
 
 // Solves s with `options`, out of place, and returns x.

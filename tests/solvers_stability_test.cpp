@@ -66,8 +66,13 @@ bool dominant_by_rows_or_columns(const System<T>& s) {
 // backward_bound: LU without pivoting of a matrix dominant by rows or columns has
 // |L||U| <= 3|A| (Higham, Accuracy and Stability, Thm 9.12), and cyclic reduction adds one
 // round of updates per level.
-constexpr Method kPivotFreeMethods[] = {Method::Thomas, Method::CyclicReduction,
-                                        Method::ParallelCyclicReduction, Method::Hybrid};
+// The pivot-free rows of the method table (Thomas, CR, PCR, CR-PCR today).
+const std::vector<Method> kPivotFreeMethods = [] {
+  std::vector<Method> methods;
+  for (const MethodRow& row : kMethodTable)
+    if (row.pivot_free) methods.push_back(row.method);
+  return methods;
+}();
 
 ::testing::Message where(const MatrixClass& matrix_class, std::ptrdiff_t n, Method method) {
   return ::testing::Message() << "class " << matrix_class.name << ", n = " << n << ", method "

@@ -91,10 +91,10 @@ constexpr KernelSet kernel_set(Solve solve) {
 
 // The solver methods, one row each: the name the command line, the benchmarks and the error
 // messages use, whether the method pivots, what it is, and how it runs: its kernel, its
-// workspace, and whether its answers are checked for cancellation. Everything that
-// dispatches on a method reads this table (to_string, method_named, kAllMethods,
-// detail::solve_one, the benchmark names and the test bounds): adding a method is its kernel
-// header (detail/), its name in Method, and one row here.
+// workspace, and whether it is a reduction (its bound and its cancellation check). Everything
+// that dispatches on a method reads this table (to_string, method_named, kAllMethods,
+// detail::solve_one, the benchmarks' names and shapes, the tests' bounds and method lists):
+// adding a method is its kernel header (detail/), its name in Method, and one row here.
 struct MethodRow {
   Method method;
   const char* name;
@@ -102,10 +102,12 @@ struct MethodRow {
   const char* summary;
   detail::KernelSet kernels = {};                           // none for Auto: it picks another row's
   std::ptrdiff_t (*workspace)(std::ptrdiff_t n) = nullptr;  // scalars the kernel needs
-  // Check the backward error of every answer against reduction_backward_bound: the reductions
-  // pass the vanishing-pivot test at every level while cancellation builds up over the levels
-  // (PCR on gallery('dorr', 512, 1e-4), dominant, returned x with a backward error of 0.5).
-  bool checks_backward_error = false;
+  // A reduction (the cyclic-reduction family): each row passes through log2(n) levels of
+  // updates, so its backward-error bound carries that factor (reduction_backward_bound; the
+  // tests' and the README's bounds read it), and every answer is checked against it: each
+  // level passes the vanishing-pivot test while cancellation builds up over the levels (PCR
+  // on gallery('dorr', 512, 1e-4), dominant, returned x with a backward error of 0.5).
+  bool reduction = false;
 };
 
 inline constexpr MethodRow kMethodTable[] = {
@@ -130,7 +132,7 @@ inline constexpr MethodRow kMethodTable[] = {
            return detail::cyclic_reduction(n, a, b, c, d, x, work, 1);
          }),
      .workspace = detail::cyclic_reduction_workspace,
-     .checks_backward_error = true},
+     .reduction = true},
     {.method = Method::ParallelCyclicReduction,
      .name = "pcr",
      .pivot_free = true,
@@ -140,7 +142,7 @@ inline constexpr MethodRow kMethodTable[] = {
            return detail::cyclic_reduction(n, a, b, c, d, x, work, n);
          }),
      .workspace = detail::cyclic_reduction_workspace,
-     .checks_backward_error = true},
+     .reduction = true},
     {.method = Method::Hybrid,
      .name = "cr-pcr",
      .pivot_free = true,
@@ -150,7 +152,7 @@ inline constexpr MethodRow kMethodTable[] = {
        return detail::cyclic_reduction(n, a, b, c, d, x, work, pcr_below);
      }),
      .workspace = detail::cyclic_reduction_workspace,
-     .checks_backward_error = true},
+     .reduction = true},
     {.method = Method::Pivoting,
      .name = "pivoting",
      .pivot_free = false,
@@ -483,9 +485,9 @@ void solve_one(const SystemView<T>& s, Strided<T> x, Method method, bool periodi
       });
   if (bad >= 0) report_breakdown(s, system, bad, to_string(method));
   require_finite_solution(result, n, system, to_string(method));
-  if (row.checks_backward_error) {
+  if (row.reduction) {
     // Every level of a reduction passes the vanishing-pivot test, yet cancellation can build
-    // up over the levels (MethodRow::checks_backward_error). One pass, less than a level.
+    // up over the levels (MethodRow::reduction). One pass, less than a level.
     const BackwardError error = backward_error(s, Strided<const T>{result, 1});
     const long double bound = reduction_backward_bound<T>(n);
     if (!(error.value <= bound))
