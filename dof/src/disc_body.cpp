@@ -50,6 +50,30 @@ struct PrefixWindow {
   std::ptrdiff_t length() const { return span + 1; }
 };
 
+// The smallest and the largest radius (|c| / 2) of a tile's pixels.
+struct RadiusRange {
+  double smallest = INFINITY, largest = 0;
+};
+
+RadiusRange radius_range(const Rect& tile, ConstPlane coc) {
+  RadiusRange range;
+  for (std::ptrdiff_t y = tile.y; y < tile.y + tile.height; ++y)
+    for (std::ptrdiff_t x = tile.x; x < tile.x + tile.width; ++x) {
+      const double r = 0.5 * std::fabs(double(coc(x, y)));
+      range.smallest = std::min(range.smallest, r);
+      range.largest = std::max(range.largest, r);
+    }
+  return range;
+}
+
+// A thread's buffers for the gather, reused from band to band.
+struct GatherScratch {
+  std::vector<double> prefix;                  // the band's row prefix sums
+  std::vector<std::ptrdiff_t> columns;         // the window's columns, folded into the frame
+  std::vector<RadiusRange> ranges;             // the band's tiles' radii
+  std::vector<double> small_rows, large_rows;  // half widths of a tile's two discs
+};
+
 // The prefix sums of `input` over `window`, a row per channel: entry i of row j, channel c is
 // prefix[(j * channels + c) * length + i], the sum of the window's first i pixels of that row.
 // Each sum depends on the one before it: kChains rows x channels are summed side by side, so
@@ -173,35 +197,32 @@ Lanes disc_averages(const double* prefix, const PrefixWindow& window, int channe
 // of a smooth tile differ by at most kSmoothCocPx / 2; a row entering at the larger radius
 // holds an area of order (Δr)^(3/2) sqrt(r), 0.7 % of the disc at r = 5, Δr = 1/4, of which
 // the interpolation misses a fraction). A tile of one radius is gathered once.
-void gather_tile(const Rect& tile, ConstPlane coc, const std::vector<double>& prefix,
-                 const PrefixWindow& window, int channels, std::vector<double>& small_rows,
-                 std::vector<double>& large_rows, float* out) {
+void gather_tile(const Rect& tile, RadiusRange range, ConstPlane coc, const PrefixWindow& window,
+                 int channels, GatherScratch& scratch, float* out) {
   const std::ptrdiff_t area = tile.area();
-  double smallest = INFINITY, largest = 0;
-  for (std::ptrdiff_t y = tile.y; y < tile.y + tile.height; ++y)
-    for (std::ptrdiff_t x = tile.x; x < tile.x + tile.width; ++x) {
-      smallest = std::min(smallest, 0.5 * std::fabs(double(coc(x, y))));
-      largest = std::max(largest, 0.5 * std::fabs(double(coc(x, y))));
-    }
-  const double small_weight = disc_rows(smallest, small_rows);
+  const double smallest = range.smallest, largest = range.largest;
+  const double small_weight = disc_rows(smallest, scratch.small_rows);
   const bool uniform = largest == smallest;
-  const double large_weight = uniform ? 0 : disc_rows(largest, large_rows);
+  const double large_weight = uniform ? 0 : disc_rows(largest, scratch.large_rows);
+  double t[kDiscTile];  // each pixel's place between the two radii
   for (std::ptrdiff_t y = tile.y; y < tile.y + tile.height; ++y) {
-    const float* c = coc.row(y) + tile.x;
+    if (!uniform) {
+      const float* c = coc.row(y) + tile.x;
+      for (std::ptrdiff_t x = 0; x < tile.width; ++x)
+        t[x] = (0.5 * std::fabs(double(c[x])) - smallest) / (largest - smallest);
+    }
     for (int channel = 0; channel < channels; ++channel) {
-      const Lanes at_small = disc_averages(prefix.data(), window, channels, channel, y, tile.x,
-                                           small_rows, small_weight);
+      const Lanes at_small = disc_averages(scratch.prefix.data(), window, channels, channel, y,
+                                           tile.x, scratch.small_rows, small_weight);
       float* to = out + channel * area + (y - tile.y) * tile.width;
       if (uniform) {
         for (std::ptrdiff_t x = 0; x < tile.width; ++x) to[x] = static_cast<float>(at_small[x]);
         continue;
       }
-      const Lanes at_large = disc_averages(prefix.data(), window, channels, channel, y, tile.x,
-                                           large_rows, large_weight);
-      for (std::ptrdiff_t x = 0; x < tile.width; ++x) {
-        const double t = (0.5 * std::fabs(double(c[x])) - smallest) / (largest - smallest);
-        to[x] = static_cast<float>(at_small[x] + t * (at_large[x] - at_small[x]));
-      }
+      const Lanes at_large = disc_averages(scratch.prefix.data(), window, channels, channel, y,
+                                           tile.x, scratch.large_rows, large_weight);
+      for (std::ptrdiff_t x = 0; x < tile.width; ++x)
+        to[x] = static_cast<float>(at_small[x] + t[x] * (at_large[x] - at_small[x]));
     }
   }
 }
@@ -209,16 +230,14 @@ void gather_tile(const Rect& tile, ConstPlane coc, const std::vector<double>& pr
 // The disc averages of a band of tiles: their prefix sums over the rows and columns their discs
 // reach, then each tile.
 void gather_band(const Image& input, ConstPlane coc, const Rect* tiles, std::size_t count,
-                 const std::size_t* offsets, std::vector<double>& prefix,
-                 std::vector<double>& small_rows, std::vector<double>& large_rows,
-                 std::vector<std::ptrdiff_t>& columns, float* values) {
-  float radius = 0;
+                 const std::size_t* offsets, GatherScratch& scratch, float* values) {
+  double radius = 0;
   std::ptrdiff_t top = tiles[0].y, bottom = top, left = tiles[0].x, right = left;
+  scratch.ranges.resize(count);
   for (std::size_t t = 0; t < count; ++t) {
     const Rect& tile = tiles[t];
-    for (std::ptrdiff_t y = tile.y; y < tile.y + tile.height; ++y)
-      for (std::ptrdiff_t x = tile.x; x < tile.x + tile.width; ++x)
-        radius = std::max(radius, 0.5f * std::fabs(coc(x, y)));
+    scratch.ranges[t] = radius_range(tile, coc);
+    radius = std::max(radius, scratch.ranges[t].largest);
     top = std::min(top, tile.y);
     bottom = std::max(bottom, tile.y + tile.height);
     left = std::min(left, tile.x);
@@ -226,13 +245,13 @@ void gather_band(const Image& input, ConstPlane coc, const Rect* tiles, std::siz
   }
   // Rows above and below: the largest radius, rounded as the gather rounds it. Columns: that,
   // and the span's ends rounded out.
-  const auto reach = static_cast<std::ptrdiff_t>(radius + 0.5f);
+  const auto reach = static_cast<std::ptrdiff_t>(radius + 0.5);
   const std::ptrdiff_t pad = reach + 3;
   const PrefixWindow window{top - reach, bottom - top + 2 * reach + 1, left - pad,
                             right - left + 2 * pad};
-  row_prefix_sums(input, window, prefix, columns);
+  row_prefix_sums(input, window, scratch.prefix, scratch.columns);
   for (std::size_t t = 0; t < count; ++t)
-    gather_tile(tiles[t], coc, prefix, window, input.channels(), small_rows, large_rows,
+    gather_tile(tiles[t], scratch.ranges[t], coc, window, input.channels(), scratch,
                 values + offsets[t]);
 }
 
@@ -282,14 +301,12 @@ DiscTiles gather_discs(const Image& input, ConstPlane coc, std::vector<Rect> til
   const auto bands = std::ptrdiff_t(band_starts.size()) - 1;
 #pragma omp parallel num_threads(threads)
   {
-    std::vector<double> prefix, small_rows, large_rows;
-    std::vector<std::ptrdiff_t> columns;
+    GatherScratch scratch;
 #pragma omp for schedule(dynamic, 1)
     for (std::ptrdiff_t b = 0; b < bands; ++b) {
       const std::size_t first = band_starts[std::size_t(b)];
       gather_band(input, coc, discs.tiles.data() + first, band_starts[std::size_t(b) + 1] - first,
-                  discs.offsets.data() + first, prefix, small_rows, large_rows, columns,
-                  discs.values.data());
+                  discs.offsets.data() + first, scratch, discs.values.data());
     }
   }
   return discs;
@@ -337,8 +354,9 @@ void paste_discs(Image& out, const DiscTiles& discs, int threads) {
       for (std::ptrdiff_t i = -1; i <= 1; ++i) blends = blends || !is_disc(tx + i, ty + j);
     float share[kDiscTile];
     for (std::ptrdiff_t y = 0; y < tile.height; ++y) {
-      for (std::ptrdiff_t x = 0; x < tile.width; ++x)
-        share[x] = blends ? blend_share(is_disc, tx, ty, tile, x, y) : 1.f;
+      if (blends)
+        for (std::ptrdiff_t x = 0; x < tile.width; ++x)
+          share[x] = blend_share(is_disc, tx, ty, tile, x, y);
       for (int c = 0; c < discs.channels; ++c) {
         const float* disc = values + (c * tile.height + y) * tile.width;
         float* to = out.plane(c).row(tile.y + y) + tile.x;
