@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <map>
 #include <cstdio>
 #include <memory>
@@ -395,12 +396,13 @@ struct BruteDisc {
 // texture with a uniform CoC, every pixel (borders included) against BruteDisc. Each row of
 // the gather holds the disc's exact area in its strip, but as a centred span, so the rim's
 // pixels differ from their true coverage, by a share that falls as 1/d: measured max 1.2e-2,
-// 3.2e-3, 2.8e-3, 1.6e-3, 4.1e-4 and rms 2.3e-3, 8.3e-4, 7.4e-4, 3.5e-4, 9.4e-5 for d = 4, 5.3,
-// 7, 16, 31.3, on values in [0, 1]. The bound is 0.06 / d (max), and a quarter of that (rms).
+// 3.2e-3, 2.8e-3, 1.6e-3 and rms 2.3e-3, 8.3e-4, 7.4e-4, 3.5e-4 for d = 4, 5.3, 7, 16, on
+// values in [0, 1]. The bound is 0.06 / d (max), and a quarter of that (rms). Wider discs are
+// gathered at half resolution (the next test).
 TEST(DofBokeh, SmoothFarFieldIsTheDiscByBruteForce) {
   constexpr std::ptrdiff_t kFrame = 96;
   const Image texture = natural_texture(kFrame, 11);
-  for (const float diameter : {4.f, 5.3f, 7.f, 16.f, 31.3f}) {
+  for (const float diameter : {4.f, 5.3f, 7.f, 16.f}) {
     const Image coc = make_coc(kFrame, kFrame, [=](auto, auto) { return diameter; });
     const Image out = run("bokeh", texture, coc);
     const BruteDisc disc(diameter);
@@ -417,6 +419,64 @@ TEST(DofBokeh, SmoothFarFieldIsTheDiscByBruteForce) {
     const double bound = 0.06 / diameter;
     EXPECT_LT(worst, bound) << "CoC " << diameter;
     EXPECT_LT(rms, bound / 4) << "CoC " << diameter;
+  }
+}
+
+// From kHalfResRadiusPx the disc is gathered from the input's 2 x 2 means and interpolated
+// back (disc_body.cpp): each pixel against the disc of its own diameter by brute force, on the
+// same texture, borders included. Uniform CoCs; a frame of odd width and height (its half
+// frame's last column and row average an edge pixel with its mirror image, and its tiles are
+// narrow; folding the half frame as a frame of its own measured 2.6e-2 here); a ramp with a
+// step within a tile; and a ramp from below the threshold to above it, so that full and half
+// resolution tiles meet. Measured max 5.5e-3, 4.2e-3, 2.3e-3 for d = 24, 31.3, 48 (rms 1.3e-3,
+// 8.7e-4, 5.0e-4), 4.4e-3 (8.6e-4) for the odd frame, 6.1e-3 (1.3e-3) for the ramp, 5.8e-3
+// (9.4e-4) across the threshold: 5-10 times the full resolution's error at the same size. Bound: 0.2 / d (max), 0.05 / d (rms), d the
+// smallest. A half pixel has one radius, its four pixels' mean, so columns alternating by
+// 0.95 px all take the disc between the two (measured max 9.5e-3, rms 2.0e-3): bound twice.
+TEST(DofBokeh, WideDiscsAtHalfResolutionAreNearTheDisc) {
+  const Image texture = natural_texture(96, 17);
+  struct Case {
+    const char* name;
+    std::ptrdiff_t width, height;
+    std::function<float(std::ptrdiff_t)> diameter;  // of the column
+    double slack = 1;                               // times the bounds
+  };
+  const float smallest = 2 * float(dof_detail::kHalfResRadiusPx);
+  const std::vector<Case> cases = {
+      {"uniform", 96, 96, [=](auto) { return smallest; }},
+      {"uniform", 96, 96, [](auto) { return 31.3f; }},
+      {"uniform", 96, 96, [](auto) { return 48.f; }},
+      {"odd frame", 93, 71, [](auto) { return 30.f; }},
+      {"ramp", 96, 96,
+       [=](std::ptrdiff_t x) { return smallest + 0.8f * float(x) / 96 + (x >= 44 ? 0.1f : 0.f); }},
+      {"ramp across the threshold", 96, 96,
+       [=](std::ptrdiff_t x) { return smallest - 0.4f + 0.8f * float(x) / 96; }},
+      {"alternating", 96, 96, [=](std::ptrdiff_t x) { return smallest + (x % 2 ? 0.95f : 0.f); },
+       2},
+  };
+  for (const Case& c : cases) {
+    const Image crop = testing_util::make_image(
+        c.width, c.height, 1, [&](auto x, auto y, int) { return texture(x, y, 0); });
+    const Image coc = make_coc(c.width, c.height, [&](auto x, auto) { return c.diameter(x); });
+    const std::vector<Rect> tiles = dof_detail::smooth_far_tiles(coc.plane(0), 1.f, 2);
+    ASSERT_EQ(tiles.size(), std::size_t(((c.width + 7) / 8) * ((c.height + 7) / 8))) << c.name;
+    const Image out = run("bokeh", crop, coc);
+    std::map<float, BruteDisc> discs;
+    double worst = 0, squares = 0;
+    for (std::ptrdiff_t y = 0; y < c.height; ++y)
+      for (std::ptrdiff_t x = 0; x < c.width; ++x) {
+        const float d = c.diameter(x);
+        const BruteDisc& disc = discs.try_emplace(d, d).first->second;
+        const double error = std::fabs(out(x, y, 0) - disc.average(crop, x, y));
+        worst = std::max(worst, error);
+        squares += error * error;
+      }
+    const double rms = std::sqrt(squares / double(c.width * c.height));
+    const float d = c.diameter(0);
+    std::printf("[ measured ] %s, CoC %g px: max %.2e, rms %.2e against each disc\n", c.name, d,
+                worst, rms);
+    EXPECT_LT(worst, c.slack * 0.2 / d) << c.name << " " << d;
+    EXPECT_LT(rms, c.slack * 0.05 / d) << c.name << " " << d;
   }
 }
 
@@ -498,25 +558,33 @@ TEST(DofBokeh, SmoothFarFieldIsTheDiscAcrossBlocks) {
 // within the smooth bound, not only for a uniform one.
 TEST(DofBokeh, SmoothFarFieldKeepsConstantsAndRamps) {
   constexpr std::ptrdiff_t kFrame = 128;
-  const Image coc = make_coc(kFrame, kFrame, [](auto x, auto y) {
-    return 9.f + 0.45f * float(std::sin(0.05 * double(x) + 0.03 * double(y)));
-  });
   const Image constant = filled(kFrame, kFrame, 2, 0.37f);
-  const Image flat = run("bokeh", constant, coc);
   const Image ramp = testing_util::make_image(kFrame, kFrame, 1, [](auto x, auto y, int) {
     return 0.2f + 0.004f * float(x) + 0.002f * float(y);
   });
-  const Image ramped = run("bokeh", ramp, coc);
-  double flat_error = 0, ramp_error = 0;
-  for (std::ptrdiff_t y = 0; y < kFrame; ++y)
-    for (std::ptrdiff_t x = 0; x < kFrame; ++x) {
-      for (int c = 0; c < 2; ++c)
-        flat_error = std::max(flat_error, double(std::fabs(flat(x, y, c) - 0.37f)));
-      if (x >= 8 && y >= 8 && x < kFrame - 8 && y < kFrame - 8)
-        ramp_error = std::max(ramp_error, double(std::fabs(ramped(x, y, 0) - ramp(x, y, 0))));
-    }
-  EXPECT_LT(flat_error, 1e-6);
-  EXPECT_LT(ramp_error, 2e-6);
+  // At full resolution, and at half (a diameter from 2 kHalfResRadiusPx up): the 2 x 2 means
+  // of a ramp are the ramp at their centres, and the interpolation is exact on it.
+  for (const float base : {9.f, 2 * float(dof_detail::kHalfResRadiusPx) + 6}) {
+    const Image coc = make_coc(kFrame, kFrame, [=](auto x, auto y) {
+      return base + 0.45f * float(std::sin(0.05 * double(x) + 0.03 * double(y)));
+    });
+    ASSERT_EQ(dof_detail::smooth_far_tiles(coc.plane(0), 1.f, 2).size(),
+              std::size_t(kFrame / dof_detail::kDiscTile * kFrame / dof_detail::kDiscTile));
+    const Image flat = run("bokeh", constant, coc);
+    const Image ramped = run("bokeh", ramp, coc);
+    // The ramp folds at the borders: compare beyond the largest radius.
+    const auto margin = std::ptrdiff_t(base / 2) + 3;
+    double flat_error = 0, ramp_error = 0;
+    for (std::ptrdiff_t y = 0; y < kFrame; ++y)
+      for (std::ptrdiff_t x = 0; x < kFrame; ++x) {
+        for (int c = 0; c < 2; ++c)
+          flat_error = std::max(flat_error, double(std::fabs(flat(x, y, c) - 0.37f)));
+        if (x >= margin && y >= margin && x < kFrame - margin && y < kFrame - margin)
+          ramp_error = std::max(ramp_error, double(std::fabs(ramped(x, y, 0) - ramp(x, y, 0))));
+      }
+    EXPECT_LT(flat_error, 1e-6) << "CoC " << base;
+    EXPECT_LT(ramp_error, 2e-6) << "CoC " << base;
+  }
 }
 
 // Which tiles take the disc: checked pixel by pixel against the rule, on a far field of CoC 10

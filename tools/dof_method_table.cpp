@@ -206,12 +206,14 @@ int measure(int argc, char** argv) {
   for (const std::string& name : only) names += (names.empty() ? "" : ", ") + name;
   const std::string measured_at =
       "(" + std::to_string(size) + "^2, " + std::to_string(threads) + " threads)";
+  // Said once, however often the same methods are re-measured.
+  const std::string remeasured = "# Re-measured alone: " + names + " " + measured_at + "\n";
+  if (comments.find(remeasured) == std::string::npos) comments += remeasured;
   const std::string csv =
       only.empty() ? "# The measured cost and error of every DOF method on the built-in scenes "
                      "(auto.hpp).\n# Regenerate: bash scripts/dof_method_table.sh " +
                          measured_at + "\n" + format_method_table(rows)
-                   : comments + "# Re-measured alone: " + names + " " + measured_at + "\n" +
-                         format_method_table(replace_rows(existing, rows));
+                   : comments + format_method_table(replace_rows(existing, rows));
   if (output.empty()) {
     std::fputs(csv.c_str(), stdout);
     return 0;

@@ -1,6 +1,8 @@
 #include "disc_body.hpp"
 
 #include <algorithm>
+#include <cassert>
+#include <limits>
 #include <cmath>
 #include <utility>
 #include <cstring>
@@ -56,53 +58,78 @@ struct RadiusRange {
 };
 
 RadiusRange radius_range(const Rect& tile, ConstPlane coc) {
-  RadiusRange range;
-  for (std::ptrdiff_t y = tile.y; y < tile.y + tile.height; ++y)
-    for (std::ptrdiff_t x = tile.x; x < tile.x + tile.width; ++x) {
-      const double r = 0.5 * std::fabs(double(coc(x, y)));
-      range.smallest = std::min(range.smallest, r);
-      range.largest = std::max(range.largest, r);
+  assert(tile.width <= kDiscTile);
+  // Column by column first, in vector lanes: a min and a max chained over all 64 pixels cost a
+  // few percent of the gather.
+  float lowest[kDiscTile], highest[kDiscTile];
+  std::fill_n(lowest, kDiscTile, INFINITY);
+  std::fill_n(highest, kDiscTile, 0.f);
+  for (std::ptrdiff_t y = tile.y; y < tile.y + tile.height; ++y) {
+    const float* c = coc.row(y) + tile.x;
+    for (std::ptrdiff_t x = 0; x < tile.width; ++x) {
+      const float a = std::fabs(c[x]);
+      lowest[x] = a < lowest[x] ? a : lowest[x];
+      highest[x] = a > highest[x] ? a : highest[x];
     }
-  return range;
+  }
+  const float smallest = *std::min_element(lowest, lowest + kDiscTile);
+  const float largest = *std::max_element(highest, highest + kDiscTile);
+  return {0.5 * double(smallest), 0.5 * double(largest)};
 }
 
 // A thread's buffers for the gather, reused from band to band.
 struct GatherScratch {
   std::vector<double> prefix;                  // the band's row prefix sums
-  std::vector<std::ptrdiff_t> columns;         // the window's columns, folded into the frame
+  std::vector<std::ptrdiff_t> columns;         // the input columns of the window's pixels
   std::vector<RadiusRange> ranges;             // the band's tiles' radii
   std::vector<double> small_rows, large_rows;  // half widths of a tile's two discs
 };
 
 // The prefix sums of `input` over `window`, a row per channel: entry i of row j, channel c is
 // prefix[(j * channels + c) * length + i], the sum of the window's first i pixels of that row.
+// The window is in the gather's frame: `input` itself (scale 1), or the 2 x 2 means of the
+// input continued as its mirror image (scale 2: half pixel u averages input columns 2u and
+// 2u + 1, folded, so that beyond the frame the half frame continues the full one's mirror
+// even for odd sizes), made here from the input's rows, only where a window reaches.
 // Each sum depends on the one before it: kChains rows x channels are summed side by side, so
 // that the adds' latency overlaps (one chain at a time made the sums a third of the gather).
 constexpr std::ptrdiff_t kChains = 8;
-void row_prefix_sums(const Image& input, const PrefixWindow& window, std::vector<double>& prefix,
-                     std::vector<std::ptrdiff_t>& columns) {
+void row_prefix_sums(const Image& input, int scale, const PrefixWindow& window,
+                     std::vector<double>& prefix, std::vector<std::ptrdiff_t>& columns) {
   const std::ptrdiff_t length = window.length();
   const int channels = input.channels();
   prefix.resize(std::size_t(window.rows * channels * length));
-  columns.resize(std::size_t(window.span));
-  for (std::ptrdiff_t i = 0; i < window.span; ++i)
-    columns[std::size_t(i)] = fold(window.first_x + i, input.width());
+  // The input columns of window pixel i: columns[i * scale + k], k < scale.
+  columns.resize(std::size_t(window.span * scale));
+  for (std::ptrdiff_t i = 0; i < window.span * scale; ++i)
+    columns[std::size_t(i)] = fold(window.first_x * scale + i, input.width());
   const std::ptrdiff_t chains = window.rows * channels;  // (row, channel) pairs, in prefix order
   for (std::ptrdiff_t first = 0; first < chains; first += kChains) {
     const std::ptrdiff_t count = std::min(kChains, chains - first);
-    const float* source[kChains];
+    const float* upper[kChains];
+    const float* lower[kChains];  // scale 2: the block's second row
     double* sums[kChains];
     for (std::ptrdiff_t k = 0; k < count; ++k) {
-      const std::ptrdiff_t j = (first + k) / channels;
-      const int c = int((first + k) % channels);
-      source[k] = input.plane(c).row(fold(window.first_row + j, input.height()));
+      const std::ptrdiff_t row = (window.first_row + (first + k) / channels) * scale;
+      const ConstPlane plane = input.plane(int((first + k) % channels));
+      upper[k] = plane.row(fold(row, input.height()));
+      lower[k] = plane.row(fold(row + scale - 1, input.height()));
       sums[k] = prefix.data() + (first + k) * length;
       sums[k][0] = 0;
     }
     double sum[kChains] = {};
+    const std::ptrdiff_t* at = columns.data();
+    if (scale == 1) {
+      for (std::ptrdiff_t i = 0; i < window.span; ++i)
+        for (std::ptrdiff_t k = 0; k < count; ++k)
+          sums[k][i + 1] = sum[k] += double(upper[k][at[i]]);
+      continue;
+    }
     for (std::ptrdiff_t i = 0; i < window.span; ++i) {
-      const std::ptrdiff_t x = columns[std::size_t(i)];
-      for (std::ptrdiff_t k = 0; k < count; ++k) sums[k][i + 1] = sum[k] += double(source[k][x]);
+      const std::ptrdiff_t left = at[2 * i], right = at[2 * i + 1];
+      for (std::ptrdiff_t k = 0; k < count; ++k)
+        sums[k][i + 1] = sum[k] += 0.25 * (double(upper[k][left]) + double(upper[k][right]) +
+                                           double(lower[k][left]) + double(lower[k][right]));
     }
   }
 }
@@ -229,8 +256,9 @@ void gather_tile(const Rect& tile, RadiusRange range, ConstPlane coc, const Pref
 
 // The disc averages of a band of tiles: their prefix sums over the rows and columns their discs
 // reach, then each tile.
-void gather_band(const Image& input, ConstPlane coc, const Rect* tiles, std::size_t count,
-                 const std::size_t* offsets, GatherScratch& scratch, float* values) {
+void gather_band(const Image& input, int scale, ConstPlane coc, const Rect* tiles,
+                 std::size_t count, const std::size_t* offsets, GatherScratch& scratch,
+                 float* values) {
   double radius = 0;
   std::ptrdiff_t top = tiles[0].y, bottom = top, left = tiles[0].x, right = left;
   scratch.ranges.resize(count);
@@ -249,7 +277,7 @@ void gather_band(const Image& input, ConstPlane coc, const Rect* tiles, std::siz
   const std::ptrdiff_t pad = reach + 3;
   const PrefixWindow window{top - reach, bottom - top + 2 * reach + 1, left - pad,
                             right - left + 2 * pad};
-  row_prefix_sums(input, window, scratch.prefix, scratch.columns);
+  row_prefix_sums(input, scale, window, scratch.prefix, scratch.columns);
   for (std::size_t t = 0; t < count; ++t)
     gather_tile(tiles[t], scratch.ranges[t], coc, window, input.channels(), scratch,
                 values + offsets[t]);
@@ -279,25 +307,43 @@ std::vector<Rect> smooth_far_tiles(ConstPlane coc, float sharp_below, int thread
   return smooth;
 }
 
-DiscTiles gather_discs(const Image& input, ConstPlane coc, std::vector<Rect> tiles, int threads) {
-  DiscTiles discs;
-  discs.channels = input.channels();
-  discs.tiles = std::move(tiles);
-  std::stable_sort(discs.tiles.begin(), discs.tiles.end(),
+namespace {
+
+// Orders tiles by block (block_of), as gather_tiles needs them.
+void sort_by_block(std::vector<Rect>& tiles) {
+  std::stable_sort(tiles.begin(), tiles.end(),
                    [](const Rect& a, const Rect& b) { return block_of(a) < block_of(b); });
-  std::size_t total = 0;
-  for (const Rect& tile : discs.tiles) {
-    discs.offsets.push_back(total);
-    total += std::size_t(tile.area() * discs.channels);
+}
+
+// Where each tile's values start when packed in order: tile i's channel c at offsets[i] + c *
+// area_i (DiscTiles). Returns the total.
+std::size_t pack(const std::vector<Rect>& tiles, int channels, std::vector<std::size_t>& offsets,
+                 std::size_t start = 0) {
+  for (const Rect& tile : tiles) {
+    offsets.push_back(start);
+    start += std::size_t(tile.area() * channels);
   }
-  discs.values.resize(total);
+  return start;
+}
+
+// Storage for `count` floats (at least one). Above 1 MiB its pages are first touched by the
+// threads that write them (allocate_zeroed_floats maps them): the values of a 4K frame's tiles
+// are tens of MB, and zeroing them on one thread first cost more than a tenth of the gather.
+detail::FloatStorage values_for(std::size_t count) {
+  return detail::allocate_zeroed_floats(std::ptrdiff_t(std::max<std::size_t>(count, 1)));
+}
+
+// The disc averages of `count` tiles (tiles of the kDiscTile grid of the gather's frame, sorted
+// by block: `input` at `scale` 1 or 2, row_prefix_sums; `coc` in that frame's pixels), into
+// values + offsets[i].
+void gather_tiles(const Image& input, int scale, ConstPlane coc, const Rect* tiles,
+                  std::size_t count, const std::size_t* offsets, float* values, int threads) {
   // Blocks of kBlockRows x kBlockColumns pixels: a block's prefix sums are made once, for its
   // tiles together.
   std::vector<std::size_t> band_starts;
-  for (std::size_t t = 0; t < discs.tiles.size(); ++t)
-    if (t == 0 || block_of(discs.tiles[t]) != block_of(discs.tiles[t - 1]))
-      band_starts.push_back(t);
-  band_starts.push_back(discs.tiles.size());
+  for (std::size_t t = 0; t < count; ++t)
+    if (t == 0 || block_of(tiles[t]) != block_of(tiles[t - 1])) band_starts.push_back(t);
+  band_starts.push_back(count);
   const auto bands = std::ptrdiff_t(band_starts.size()) - 1;
 #pragma omp parallel num_threads(threads)
   {
@@ -305,10 +351,195 @@ DiscTiles gather_discs(const Image& input, ConstPlane coc, std::vector<Rect> til
 #pragma omp for schedule(dynamic, 1)
     for (std::ptrdiff_t b = 0; b < bands; ++b) {
       const std::size_t first = band_starts[std::size_t(b)];
-      gather_band(input, coc, discs.tiles.data() + first, band_starts[std::size_t(b) + 1] - first,
-                  discs.offsets.data() + first, scratch, discs.values.data());
+      gather_band(input, scale, coc, tiles + first, band_starts[std::size_t(b) + 1] - first,
+                  offsets + first, scratch, values);
     }
   }
+}
+
+// The half-resolution gather (kHalfResRadiusPx). Full-resolution pixel x sits at x / 2 - 1/4 in
+// the half frame, between half pixels floor(x / 2 - 1/4) and the next, weights 3/4 and 1/4 (x
+// odd) or 1/4 and 3/4 (x even): a tile from x0 (a multiple of kDiscTile) reads half columns
+// x0 / 2 - 1 .. (x0 + width) / 2, and the same for rows. Beyond the half frame the mirror
+// repeats the edge pixel, which the interpolation reads by clamping.
+struct HalfSpan {
+  std::ptrdiff_t first, last;  // inclusive, clamped to the half frame
+};
+HalfSpan half_span(std::ptrdiff_t start, std::ptrdiff_t length, std::ptrdiff_t half_length) {
+  return {std::max<std::ptrdiff_t>(start / 2 - 1, 0),
+          std::min((start + length) / 2, half_length - 1)};
+}
+
+// The half frame's gather: the tiles of its kDiscTile grid that hold a half pixel some coarse
+// tile reads, their CoC, and their disc averages.
+struct HalfGather {
+  std::ptrdiff_t width = 0, height = 0, tiles_x = 0, tiles_y = 0;
+  std::vector<Rect> tiles;  // sorted by block, as gather_tiles needs
+  Image coc;                // a diameter in half pixels
+  std::vector<std::size_t> offsets;
+  detail::FloatStorage values;
+  std::vector<std::size_t> tile_index;  // per tile of the grid: its place in `tiles`
+  static constexpr std::size_t kNotGathered = std::numeric_limits<std::size_t>::max();
+
+  // Half pixel (x, y) of the gather, channel 0; channel c is c * plane(x, y) further.
+  const float* at(std::ptrdiff_t x, std::ptrdiff_t y) const {
+    const std::size_t t = tile_index[std::size_t((y / kDiscTile) * tiles_x + x / kDiscTile)];
+    assert(t != kNotGathered);  // plan_half_gather marks every half pixel a tile reads
+    const Rect& tile = tiles[t];
+    return values.get() + offsets[t] + (y - tile.y) * tile.width + (x - tile.x);
+  }
+  std::ptrdiff_t plane(std::ptrdiff_t x, std::ptrdiff_t y) const {
+    return tiles[tile_index[std::size_t((y / kDiscTile) * tiles_x + x / kDiscTile)]].area();
+  }
+};
+
+// Tile (tx, ty) of the half frame, cut at its edges.
+Rect half_tile(const HalfGather& half, std::ptrdiff_t tx, std::ptrdiff_t ty) {
+  return {tx * kDiscTile, ty * kDiscTile, std::min(kDiscTile, half.width - tx * kDiscTile),
+          std::min(kDiscTile, half.height - ty * kDiscTile)};
+}
+
+// The mean radius of the four full pixels of half pixel (x, y).
+double block_radius(ConstPlane coc, std::ptrdiff_t x, std::ptrdiff_t y) {
+  double sum = 0;
+  for (std::ptrdiff_t j = 0; j < 2; ++j)
+    for (std::ptrdiff_t i = 0; i < 2; ++i)
+      sum += std::fabs(double(coc(fold(2 * x + i, coc.width()), fold(2 * y + j, coc.height()))));
+  return sum / 8;
+}
+
+// The half disc's radius, in full pixels, for a full-resolution radius r: narrower, because the
+// 2 x 2 mean and the interpolation blur too. Matching the spreads (per axis, the disc's
+// variance r² / 4 against the mean's 1/3 px² and the interpolation's 3/4 px², weights 3/4 and
+// 1/4 at 1/2 and 3/2 px) gives sqrt(r² - 13/3); against the exact disc on a 1/f² texture
+// (d = 24 to 64 px) the error is least near sqrt(r² - 5/2), 2-7 % less rms: a disc is no bell.
+// At least 1 px, so that the disc has rows (smooth_far_tiles' tiles have r >= 11.5).
+double half_disc_radius(double r) { return std::sqrt(std::max(r * r - 2.5, 1.0)); }
+
+// Which half tiles the coarse tiles read, and their CoC (the half disc's diameter in half
+// pixels, numerically its radius in full ones). A read half pixel takes the mean radius of its
+// four pixels; the others of its tile are gathered but never read, and take the tile's
+// smallest CoC, so that the tile's radius range is the read pixels'.
+void plan_half_gather(HalfGather& half, ConstPlane coc, const std::vector<Rect>& coarse,
+                      int threads) {
+  half.width = (coc.width() + 1) / 2;
+  half.height = (coc.height() + 1) / 2;
+  half.tiles_x = (half.width + kDiscTile - 1) / kDiscTile;
+  half.tiles_y = (half.height + kDiscTile - 1) / kDiscTile;
+  std::vector<unsigned char> read(std::size_t(half.width * half.height), 0);
+  for (const Rect& tile : coarse) {
+    const HalfSpan u = half_span(tile.x, tile.width, half.width);
+    const HalfSpan v = half_span(tile.y, tile.height, half.height);
+    for (std::ptrdiff_t y = v.first; y <= v.last; ++y)
+      std::fill_n(read.begin() + y * half.width + u.first, u.last - u.first + 1, 1);
+  }
+  half.coc = Image(half.width, half.height, 1);
+  std::vector<unsigned char> tile_read(std::size_t(half.tiles_x * half.tiles_y), 0);
+#pragma omp parallel for num_threads(threads) schedule(static)
+  for (std::ptrdiff_t ty = 0; ty < half.tiles_y; ++ty)
+    for (std::ptrdiff_t tx = 0; tx < half.tiles_x; ++tx) {
+      const Rect tile = half_tile(half, tx, ty);
+      float smallest = INFINITY;
+      for (std::ptrdiff_t y = tile.y; y < tile.y + tile.height; ++y)
+        for (std::ptrdiff_t x = tile.x; x < tile.x + tile.width; ++x)
+          if (read[std::size_t(y * half.width + x)]) {
+            const auto c = static_cast<float>(half_disc_radius(block_radius(coc, x, y)));
+            half.coc(x, y, 0) = c;
+            smallest = std::min(smallest, c);
+          }
+      if (smallest == INFINITY) continue;
+      for (std::ptrdiff_t y = tile.y; y < tile.y + tile.height; ++y)
+        for (std::ptrdiff_t x = tile.x; x < tile.x + tile.width; ++x)
+          if (!read[std::size_t(y * half.width + x)]) half.coc(x, y, 0) = smallest;
+      tile_read[std::size_t(ty * half.tiles_x + tx)] = 1;
+    }
+  for (std::ptrdiff_t ty = 0; ty < half.tiles_y; ++ty)
+    for (std::ptrdiff_t tx = 0; tx < half.tiles_x; ++tx)
+      if (tile_read[std::size_t(ty * half.tiles_x + tx)])
+        half.tiles.push_back(half_tile(half, tx, ty));
+  sort_by_block(half.tiles);
+}
+
+// A coarse tile's values (out, as DiscTiles packs them), interpolated from the half gather.
+void interpolate_tile(const Rect& tile, const HalfGather& half, int channels, float* out) {
+  // The half pixels tile.x / 2 - 1 + i, i < kPatch, of rows tile.y / 2 - 1 + j.
+  constexpr std::ptrdiff_t kPatch = kDiscTile / 2 + 2;
+  const HalfSpan u = half_span(tile.x, tile.width, half.width);
+  const HalfSpan v = half_span(tile.y, tile.height, half.height);
+  const float* from[kPatch][kPatch];
+  std::ptrdiff_t plane[kPatch][kPatch];
+  for (std::ptrdiff_t j = 0; j < kPatch; ++j)
+    for (std::ptrdiff_t i = 0; i < kPatch; ++i) {
+      const std::ptrdiff_t x = std::clamp(tile.x / 2 - 1 + i, u.first, u.last);
+      const std::ptrdiff_t y = std::clamp(tile.y / 2 - 1 + j, v.first, v.last);
+      from[j][i] = half.at(x, y);
+      plane[j][i] = half.plane(x, y);
+    }
+  for (int c = 0; c < channels; ++c) {
+    float patch[kPatch][kPatch];
+    for (std::ptrdiff_t j = 0; j < kPatch; ++j)
+      for (std::ptrdiff_t i = 0; i < kPatch; ++i) patch[j][i] = from[j][i][c * plane[j][i]];
+    // Pixel tile.x + k reads patch columns (k + 1) / 2 and the next, the second with weight
+    // 3/4 for even k and 1/4 for odd k (HalfSpan); the same for rows.
+    for (std::ptrdiff_t y = 0; y < tile.height; ++y) {
+      const float* top = patch[(y + 1) / 2];
+      const float* bottom = patch[(y + 1) / 2 + 1];
+      const float fy = y % 2 == 0 ? 0.75f : 0.25f;
+      float* to = out + c * tile.area() + y * tile.width;
+      for (std::ptrdiff_t x = 0; x < tile.width; ++x) {
+        const std::ptrdiff_t i = (x + 1) / 2;
+        const float fx = x % 2 == 0 ? 0.75f : 0.25f;
+        const float upper = top[i] + fx * (top[i + 1] - top[i]);
+        const float lower = bottom[i] + fx * (bottom[i + 1] - bottom[i]);
+        to[x] = upper + fy * (lower - upper);
+      }
+    }
+  }
+}
+
+// The coarse tiles' values (tile i at values + offsets[i]): the discs of the half frame's
+// pixels, then each tile interpolated from them.
+void gather_coarse(const Image& input, ConstPlane coc, const std::vector<Rect>& coarse,
+                   const std::size_t* offsets, float* values, int threads) {
+  HalfGather half;
+  plan_half_gather(half, coc, coarse, threads);
+  half.values = values_for(pack(half.tiles, input.channels(), half.offsets));
+  gather_tiles(input, 2, half.coc.plane(0), half.tiles.data(), half.tiles.size(),
+               half.offsets.data(), half.values.get(), threads);
+  half.tile_index.assign(std::size_t(half.tiles_x * half.tiles_y), HalfGather::kNotGathered);
+  for (std::size_t t = 0; t < half.tiles.size(); ++t) {
+    const Rect& tile = half.tiles[t];
+    half.tile_index[std::size_t((tile.y / kDiscTile) * half.tiles_x + tile.x / kDiscTile)] = t;
+  }
+  const auto count = std::ptrdiff_t(coarse.size());
+#pragma omp parallel for num_threads(threads) schedule(static)
+  for (std::ptrdiff_t t = 0; t < count; ++t)
+    interpolate_tile(coarse[std::size_t(t)], half, input.channels(),
+                     values + offsets[std::size_t(t)]);
+}
+
+}  // namespace
+
+DiscTiles gather_discs(const Image& input, ConstPlane coc, std::vector<Rect> tiles, int threads) {
+  std::vector<unsigned char> is_coarse(tiles.size());
+  const auto all = std::ptrdiff_t(tiles.size());
+#pragma omp parallel for num_threads(threads) schedule(static)
+  for (std::ptrdiff_t t = 0; t < all; ++t)
+    is_coarse[std::size_t(t)] =
+        radius_range(tiles[std::size_t(t)], coc).smallest >= kHalfResRadiusPx;
+  std::vector<Rect> fine, coarse;
+  for (std::size_t t = 0; t < tiles.size(); ++t) (is_coarse[t] ? coarse : fine).push_back(tiles[t]);
+  sort_by_block(fine);
+  DiscTiles discs;
+  discs.channels = input.channels();
+  discs.tiles = fine;
+  discs.tiles.insert(discs.tiles.end(), coarse.begin(), coarse.end());
+  discs.values = values_for(pack(discs.tiles, discs.channels, discs.offsets));
+  gather_tiles(input, 1, coc, fine.data(), fine.size(), discs.offsets.data(), discs.values.get(),
+               threads);
+  if (!coarse.empty())
+    gather_coarse(input, coc, coarse, discs.offsets.data() + fine.size(), discs.values.get(),
+                  threads);
   return discs;
 }
 
@@ -348,7 +579,7 @@ void paste_discs(Image& out, const DiscTiles& discs, int threads) {
   for (std::ptrdiff_t t = 0; t < count; ++t) {
     const Rect& tile = discs.tiles[std::size_t(t)];
     const std::ptrdiff_t tx = tile.x / kDiscTile, ty = tile.y / kDiscTile;
-    const float* values = discs.values.data() + discs.offsets[std::size_t(t)];
+    const float* values = discs.values.get() + discs.offsets[std::size_t(t)];
     bool blends = false;  // a neighbouring tile keeps the diffusion
     for (std::ptrdiff_t j = -1; j <= 1; ++j)
       for (std::ptrdiff_t i = -1; i <= 1; ++i) blends = blends || !is_disc(tx + i, ty + j);
