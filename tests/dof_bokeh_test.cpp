@@ -705,7 +705,8 @@ TEST(DofBokeh, BodyIsNearerTheDiscThanAdiOnNaturalTexture) {
   }
 }
 
-// Each thread adds its own rows, highlights in raster order: the thread count changes no bit.
+// Each strip of rows takes its highlights in the same order whichever thread takes it: the
+// thread count changes no bit.
 TEST(DofBokeh, ThreadCountChangesNoBit) {
   const Lamps f = dark_frame_with_lamps();
   DofOptions one = bladed(6), two = bladed(6);
@@ -717,8 +718,9 @@ TEST(DofBokeh, ThreadCountChangesNoBit) {
 }
 
 // The round aperture's sprites add the rows' fully visible runs as steps, summed once a row
-// (method_bokeh.cpp, SpriteStrip): 40 lamps over a 160 x 120 frame, within 3 px of every
-// border and corner (their rows and columns fold) and across the strips of 16 rows, each
+// (method_bokeh.cpp, SpriteStrip): 40 lamps over a 160 x 120 frame, a quarter within 3 px of
+// the left or right border and a quarter of the top or bottom (their columns and rows fold),
+// across the strips of 16 rows, each
 // lamp's sprite the disc of its own CoC (16-22 px, slow enough that every sprite shows in
 // full), against the sum of the lamps' discs by brute force as in the test above; and the
 // thread count changes no bit (the strips go to whichever thread is free). Measured max
@@ -734,7 +736,8 @@ TEST(DofBokeh, RoundSpritesAreTheirDiscsAcrossStripsAndBorders) {
   std::vector<double> expected(std::size_t(3 * kWidth * kHeight), 0.0);
   std::mt19937 random(5);
   for (int i = 0; i < 40; ++i) {
-    // Every fourth lamp within 3 px of a left or right border, every fourth of a top or bottom.
+    // A quarter of the lamps within 3 px of the left or right border, a quarter of the top or
+    // bottom.
     std::ptrdiff_t x = std::uniform_int_distribution<std::ptrdiff_t>(0, kWidth - 1)(random);
     std::ptrdiff_t y = std::uniform_int_distribution<std::ptrdiff_t>(0, kHeight - 1)(random);
     if (i % 4 == 0) x = i % 8 == 0 ? x % 3 : kWidth - 1 - x % 3;
@@ -781,25 +784,75 @@ TEST(DofBokeh, RoundSpritesAreTheirDiscsAcrossStripsAndBorders) {
   }
 }
 
-// Where a sprite's run crosses a sharp pixel, that pixel sees none of it (a far light behind
-// the focal plane): a sharp column through the middle of large round sprites stays as it was,
-// bit for bit, though the runs on either side of it are summed as steps.
-TEST(DofBokeh, SharpPixelsInsideRoundSpritesStayBitForBit) {
+// Between the runs of a row no run is open, and there the steps' sum is reset to exactly 0: a
+// sharp column (CoC 0, value 0) between the runs of large round sprites on either side of it
+// (runs in other blocks of 16 pixels than the column's, so they take the steps; three lamps
+// of different values on each side, so that the steps do not cancel exactly) stays 0, bit
+// for bit.
+TEST(DofBokeh, SharpPixelsBetweenRoundSpritesStayBitForBit) {
+  constexpr std::ptrdiff_t kWidth = 128, kHeight = 64;
+  Lamps f{filled(kWidth, kHeight, 3, 0.2f),
+          make_coc(kWidth, kHeight, [](auto x, auto) { return x == 48 ? 0.f : 30.f; })};
+  for (std::ptrdiff_t y = 0; y < kHeight; ++y)
+    for (int c = 0; c < 3; ++c) f.color(48, y, c) = 0.f;
+  for (int i = 0; i < 3; ++i) {
+    f.color(20 + 4 * i, 30, 1) = 300.f + 170.f * float(i);
+    f.color(86 + 4 * i, 30, 1) = 410.f + 130.f * float(i);
+  }
+  for (const int threads : {1, 2}) {
+    DofOptions settings;
+    settings.threads = threads;
+    const Image out = run("bokeh", f.color, f.coc, settings);
+    for (std::ptrdiff_t y = 0; y < kHeight; ++y)
+      for (int c = 0; c < 3; ++c) ASSERT_EQ(out(48, y, c), 0.f) << y << ", channel " << c;
+    EXPECT_GT(out(40, 30, 1), 1.f);  // the sprites landed beside it
+    EXPECT_GT(out(80, 30, 1), 1.f);
+  }
+}
+
+// A sprite hidden by a near object in one strip of rows only (rows 16-31, x >= 48) and seen
+// in full in the strips above and below it: the strip's test of full visibility must look at
+// its own rows (a test that kept the rows' minima of the strip before would add the sprite
+// over the near object). The near object's pixels get nothing of it; with the object gone
+// from those rows, the same pixels get their share.
+TEST(DofBokeh, SpriteHiddenInOneStripOnly) {
   constexpr std::ptrdiff_t kFrame = 96;
-  Lamps f{filled(kFrame, kFrame, 3, 0.2f),
-          make_coc(kFrame, kFrame, [](auto x, auto) { return x == 48 ? 0.f : 30.f; })};
-  for (std::ptrdiff_t y = 10; y < kFrame; y += 17) f.color(40, y, 1) = f.color(56, y, 0) = 500.f;
-  for (std::ptrdiff_t y = 0; y < kFrame; ++y) f.color(48, y, 2) = 0.1f * float(y % 7);
-  const Image out = run("bokeh", f.color, f.coc);
+  Lamps f{filled(kFrame, kFrame, 3, 0.f),
+          make_coc(kFrame, kFrame, [](auto, auto) { return 40.f; })};
+  f.color(44, 24, 0) = f.color(44, 24, 1) = f.color(44, 24, 2) = 1000.f;
+  const Image near = make_coc(
+      kFrame, kFrame, [](auto x, auto y) { return x >= 48 && y >= 16 && y < 32 ? -12.f : 40.f; });
+  DofOptions settings;
+  settings.threads = 1;
+  const Image open = run("bokeh", f.color, f.coc, settings);
+  const Image hidden = run("bokeh", f.color, near, settings);
+  double open_part = 0, hidden_part = 0;
+  for (std::ptrdiff_t y = 16; y < 32; ++y)
+    for (std::ptrdiff_t x = 56; x < 64; ++x) {
+      open_part += open(x, y, 1);
+      hidden_part += hidden(x, y, 1);
+    }
+  EXPECT_GT(open_part, 10.0);
+  EXPECT_LT(hidden_part, 0.01 * open_part);
+}
+
+// Images of any number of channels (here 5, each the same lamp) take the round sprite's steps
+// channel by channel: every channel's output is the same.
+TEST(DofBokeh, RoundSpritesOfFiveChannels) {
+  constexpr std::ptrdiff_t kFrame = 64;
+  Image color = filled(kFrame, kFrame, 5, 0.1f);
+  for (int c = 0; c < 5; ++c) color(30, 33, c) = 800.f;
+  const Image coc = make_coc(kFrame, kFrame, [](auto, auto) { return 24.f; });
+  const Image out = run("bokeh", color, coc);
+  EXPECT_GT(out(30, 33, 0), 0.5f);
   for (std::ptrdiff_t y = 0; y < kFrame; ++y)
-    for (int c = 0; c < 3; ++c)
-      ASSERT_EQ(out(48, y, c), f.color(48, y, c)) << y << ", channel " << c;
-  EXPECT_GT(out(44, 10, 1), 0.3f);  // the sprites did land beside it
+    for (std::ptrdiff_t x = 0; x < kFrame; ++x)
+      for (int c = 1; c < 5; ++c) ASSERT_EQ(out(x, y, c), out(x, y, 0)) << x << ", " << y;
 }
 
 // A near object (CoC -12) over the right part of a far lamp's sprite (CoC +20) hides that part;
 // the left part is as without it. With the hexagon (every pixel on the per-pixel path) and the
-// round aperture (the fully covered runs of its rows on the vectorised path).
+// round aperture (the runs it may hide on the vectorised path, the others as steps).
 TEST(DofBokeh, NearObjectOccludesTheSprite) {
   Lamps f{filled(96, 96, 3, 0.f), make_coc(96, 96, [](auto, auto) { return 20.f; })};
   f.color(44, 48, 0) = f.color(44, 48, 1) = f.color(44, 48, 2) = 1000.f;

@@ -36,9 +36,9 @@
 // aperture (a row's fully visible run is two steps, summed once a row: SpriteStrip) and
 // O(highlights x CoC^2) with a shaped one; sprites adding up to more than kMaxSplatWeights are
 // refused (SplatWork, aperture_footprint.hpp), naming the largest CoC. Parallel: the threads
-// take strips of output rows as they come free, and each adds, in raster order of the
-// highlights, the part of every sprite that falls in its strip: the result does not depend on
-// the number of threads.
+// take strips of output rows as they come free, and each adds the part of every sprite that
+// falls in its strip: pixel by pixel in raster order of the highlights, the steps' sums after
+// them. A row's result does not depend on the thread that took it, nor on their number.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -255,7 +255,8 @@ struct SpriteStrip {
     std::fill(has_mins.begin(), has_mins.end(), 0);
   }
 
-  // Whether every pixel of row y in [x0, x1] has a CoC of at least `least`.
+  // Whether every pixel of row y in [x0, x1] has a CoC of at least `least` (the CoC is finite,
+  // DofFrame checks it: a NaN would drop out of the minima).
   bool all_at_least(std::ptrdiff_t y, std::ptrdiff_t x0, std::ptrdiff_t x1, float least) {
     const std::ptrdiff_t r = y - first_row;
     float* mins = block_min.data() + r * blocks();
@@ -274,13 +275,15 @@ struct SpriteStrip {
     return true;
   }
 
-  // Adds `amounts` (a channel each) to row y's pixels x0 .. x1.
-  void add_run(std::ptrdiff_t y, std::ptrdiff_t x0, std::ptrdiff_t x1, const double* amounts) {
+  // Adds weight * excess[c] to channel c of row y's pixels x0 .. x1.
+  void add_run(std::ptrdiff_t y, std::ptrdiff_t x0, std::ptrdiff_t x1, double weight,
+               const float* excess) {
     const std::ptrdiff_t r = y - first_row;
     for (int c = 0; c < channels; ++c) {
       double* row = steps.data() + (r * channels + c) * (width + 1);
-      row[x0] += amounts[c];
-      row[x1 + 1] -= amounts[c];
+      const double amount = weight * double(excess[c]);
+      row[x0] += amount;
+      row[x1 + 1] -= amount;
     }
     ++opens[std::size_t(r * (width + 1) + x0)];
     --opens[std::size_t(r * (width + 1) + x1 + 1)];
@@ -340,8 +343,9 @@ void splat_row(const DofFrame& frame, const Highlight& light, const float* exces
       out(tx, ty, c) += static_cast<float>(weight * double(excess[c]));
   };
   const std::ptrdiff_t hx = dof_detail::footprint_row_half_width(light.outer, dy);
-  // The part of the row covered fully and inside the frame, [-solid, solid], takes the same
-  // sums as add_pixel, in a loop without square roots or folds.
+  // The part of the row covered fully and inside the frame, [-solid, solid]: two steps where
+  // every pixel of it sees the light in full, else add_pixel's sums in a loop without square
+  // roots or folds (add_solid_run).
   std::ptrdiff_t solid = footprint.solid_half_width(light.outer, dy);
   if (qx - solid < 0 || qx + solid >= width) solid = -1;
   for (std::ptrdiff_t dx = -hx; dx < std::min<std::ptrdiff_t>(-solid, 0); ++dx) add_pixel(dx);
@@ -350,9 +354,7 @@ void splat_row(const DofFrame& frame, const Highlight& light, const float* exces
     // half a pixel of CoC to spare, so that the float arithmetic of visibility() gives 1 too.
     const float least = std::max(light.coc - 0.5f, light.coc > 0 ? focus.sharp_below : -INFINITY);
     if (strip.all_at_least(ty, qx - solid, qx + solid, least)) {
-      double amounts[4];
-      for (int c = 0; c < channels; ++c) amounts[c] = light.inv_sum * double(excess[c]);
-      strip.add_run(ty, qx - solid, qx + solid, amounts);
+      strip.add_run(ty, qx - solid, qx + solid, light.inv_sum, excess);
     } else {
       add_solid_run(coc.row(ty) + qx - solid, 2 * solid + 1, light, excess, focus, out, qx - solid,
                     ty);
@@ -362,7 +364,8 @@ void splat_row(const DofFrame& frame, const Highlight& light, const float* exces
 }
 
 // Adds the part of every sprite that falls in the strip's rows [s0, s1) to out. A row takes
-// its sprites in raster order, so the result does not depend on which thread takes the strip.
+// its sprites' pixels in raster order of the highlights and then the sums of its steps, so
+// the result does not depend on which thread takes the strip.
 void splat_strip(const DofFrame& frame, const Sprites& sprites, const ApertureFootprint& footprint,
                  std::ptrdiff_t s0, std::ptrdiff_t s1, SpriteStrip& strip, Image& out) {
   const std::ptrdiff_t height = frame.height();
