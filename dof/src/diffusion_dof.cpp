@@ -101,7 +101,7 @@ void for_each_row(std::ptrdiff_t height, int threads, Row&& row) {
 // The layers' background: the colour and the CoC's magnitude outside the near field as they
 // are, and inside it filled from around it, at half resolution. The 2 x 2 means of the known
 // values (premultiplied by known = 0 or 1) and of `known` are diffused with the conductance
-// beta / 4 (the same spread in half pixels) inside `reach`, and a near pixel takes the ratio
+// beta / 4 (the same spread in full pixels) inside `reach`, and a near pixel takes the ratio
 // of the two (filled()), each interpolated bilinearly (pixel x at x / 2 - 1/4 in the half
 // frame: weights 3/4 and 1/4). A quarter of the full resolution's solves, and one pass over
 // the frame each way; the fill is a smooth guess at what the near field hides, and against
@@ -127,18 +127,20 @@ void fill_background(Image& background, Plane background_coc, const Image& color
           const float k = coc(columns[i], rows[j]);
           known[j][i] = near.contains(k) ? 0.f : 1.f;
           w += known[j][i];
-          m += known[j][i] * std::abs(k);
+          m += 0.25f * known[j][i] * std::abs(k);
           r = std::max(r, reach(columns[i], rows[j]));
         }
       weight[u] = 0.25f * w;
-      magnitude[u] = 0.25f * m;
+      magnitude[u] = m;
       inside[u] = r;
       for (int c = 0; c < channels; ++c) {
+        // Each term scaled before the sum: four colours near the float's largest must not
+        // add up to inf.
         const ConstPlane p = color.plane(c);
         float sum = 0;
         for (int j = 0; j < 2; ++j)
-          for (int i = 0; i < 2; ++i) sum += known[j][i] * p(columns[i], rows[j]);
-        half(u, v, c) = 0.25f * sum;
+          for (int i = 0; i < 2; ++i) sum += 0.25f * known[j][i] * p(columns[i], rows[j]);
+        half(u, v, c) = sum;
       }
     }
   });
@@ -193,8 +195,9 @@ void layered_dof(Image& out, const DofFrame& frame, const NearLayer& near,
   const auto in_near_field = [&near](float coc_px) { return near.contains(coc_px); };
 
   // Background: the near field cut out and its hole filled from around it, the colour and
-  // the CoC alike (the colour planes solved together, then the CoC with the weight).
-  Image background(width, height, channels), background_coc(width, height, 2);  // |CoC|, spare
+  // the CoC alike (one solve at half resolution: fill_background).
+  Image background(width, height, channels),
+      background_coc(width, height, 2);  // |CoC|; plane 1 the near blur's weight
   timed(report, "background fill", [&] {
     fill_background(background, background_coc.plane(0), color, coc, near, fill_beta, within,
                     threads);
